@@ -1,0 +1,93 @@
+// A contact law chains five orthogonal sub-models (normal, damping, tangential, rolling or
+// bending, twisting), each a stateless struct with plain-data Params and State and one
+// static apply (see docs/contact-models.md and ../shared/DESIGN.md). The force loop is
+// compiled once per law, so everything below inlines: no virtual calls per pair.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "models/pair.hpp"
+#include "models/params.hpp"
+
+namespace cohdem {
+
+template <class N, class D, class T, class R, class W>
+struct ContactLaw {
+  using Normal = N;
+  using Damping = D;
+  using Tangential = T;
+  using Rolling = R;
+  using Twisting = W;
+
+  struct Params {
+    typename N::Params normal;
+    typename D::Params damping;
+    typename T::Params tangential;
+    typename R::Params rolling;
+    typename W::Params twisting;
+  };
+  /// History of one contact, stored per id pair (lower id is i). Empty sub-states take no room.
+  struct State {
+    [[no_unique_address]] typename N::State normal;
+    [[no_unique_address]] typename D::State damping;
+    [[no_unique_address]] typename T::State tangential;
+    [[no_unique_address]] typename R::State rolling;
+    [[no_unique_address]] typename W::State twisting;
+  };
+
+  static std::vector<ParamSpec> specs() {
+    std::vector<ParamSpec> v;
+    auto add = [&](const auto& a) {
+      for (const auto& s : a) {
+        bool dup = false;
+        for (const auto& e : v) dup = dup || std::string(e.name) == s.name;
+        if (!dup) v.push_back(s);
+      }
+    };
+    add(N::specs); add(D::specs); add(T::specs); add(R::specs); add(W::specs);
+    return v;
+  }
+
+  static Params make(const ParamSet& p, const PairMaterial& m) {
+    return {N::make(p, m), D::make(p, m), T::make(p, m), R::make(p, m), W::make(p, m)};
+  }
+
+  /// Largest tensile separation (m, >= 0) at which a live contact still acts.
+  static double reach(const Params& p, double rstar) { return N::reach(p.normal, rstar); }
+
+  /// Evaluates one contact. Returns false (and resets the history) when there is none.
+  static bool evaluate(const Params& p, const PairGeom& g, State& s, PairForce& out) {
+    NormalOut no;
+    N::apply(p.normal, g, s.normal, no);
+    if (!no.alive) {
+      s = State{};
+      return false;
+    }
+    double gamma_n = 0;
+    const double fd = D::apply(p.damping, g, no, gamma_n);
+    const double fn = no.f_el + fd;
+    const double fc = N::coulomb_base(p.normal, no, fn);
+    const Vec3 ft = T::apply(p.tangential, g, no, gamma_n, fc, s.tangential);
+    const Vec3 mr = R::apply(p.rolling, g, no, fc, s.rolling);
+    const double mt = W::apply(p.twisting, g, no, fc, s.twisting);
+
+    // Lever arms from each centre to the contact point: the middle of the overlap for two
+    // spheres, the wall surface for a wall (rj == 0).
+    const double li = g.rj > 0 ? g.ri - 0.5 * g.delta : g.ri - g.delta;
+    const double lj = g.rj > 0 ? g.rj - 0.5 * g.delta : 0.0;
+    const Vec3 nxft = cross(g.n, ft);
+    const Vec3 mtw = g.n * mt;
+    out.f = g.n * fn + ft;
+    out.ti = nxft * (-li) + mr + mtw;
+    out.tj = nxft * (-lj) - mr - mtw;
+    out.fn = fn;
+    out.fn_el = no.f_el;
+    out.ft = ft;
+    out.mr = mr;
+    out.mt = mt;
+    out.a = no.a;
+    return true;
+  }
+};
+
+}  // namespace cohdem

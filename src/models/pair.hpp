@@ -1,0 +1,43 @@
+// What a contact sub-model sees and writes. Sign conventions (used everywhere):
+//  - n is the unit normal from j to i; delta = r_i + r_j - |x_i - x_j| > 0 in contact.
+//  - A wall plays j with r_j = 0 (R* = r_i, m* = m_i); its velocity at the contact point is v_j.
+//  - Normal forces are scalars with repulsion positive; the force on i is fn * n + ft.
+#pragma once
+#include "core/vec3.hpp"
+
+namespace cohdem {
+
+struct PairGeom {
+  Vec3 n;            ///< unit normal, j -> i
+  double delta = 0;  ///< overlap, m (negative when apart)
+  double ri = 0, rj = 0;       ///< radii; rj = 0 for a wall
+  double rstar = 0, mstar = 0; ///< effective radius m, effective mass kg
+  double mi = 0, mj = 0;       ///< masses, kg (mj = inf for a wall)
+  double Ii = 0, Ij = 0;       ///< moments of inertia, kg m^2 (Ij = inf for a wall)
+  double vn = 0;     ///< (v_i - v_j) . n, m/s; negative while approaching
+  Vec3 vt;           ///< tangential relative velocity of the contact points (i relative to j), m/s
+  Vec3 wrel;         ///< omega_i - omega_j, rad/s
+  double dt = 0;     ///< time step, s
+};
+
+/// Output of the normal sub-model, read by damping, tangential, rolling and twisting.
+struct NormalOut {
+  double f_el = 0;   ///< elastic/hysteretic normal force, N (repulsive > 0, adhesive < 0)
+  double kn = 0;     ///< tangent stiffness d f_el / d delta, N/m (damping, rolling stiffness)
+  double a = 0;      ///< contact radius, m (conduction, Mindlin stiffness)
+  bool alive = false;///< the contact exists (history kept); false ends it and resets history
+};
+
+/// Output of one contact evaluation.
+struct PairForce {
+  Vec3 f;            ///< total force on i (on j: -f), N
+  Vec3 ti, tj;       ///< torques on i and on j, N m
+  double fn = 0;     ///< total normal force (elastic + damping), N, repulsive > 0
+  double fn_el = 0;  ///< elastic/hysteretic part, N
+  Vec3 ft;           ///< tangential force on i, N
+  Vec3 mr;           ///< rolling (and bending) moment on i, N m
+  double mt = 0;     ///< twisting moment on i about n, N m
+  double a = 0;      ///< contact radius, m
+};
+
+}  // namespace cohdem

@@ -1,0 +1,75 @@
+// Rolling resistance sub-models. The rolling angular velocity is the tangential part of
+// omega_i - omega_j; the moment acts on i, its opposite on j.
+//
+// NoRolling: none.
+// EpsdRolling: elastic-plastic spring-dashpot (Ai, Chen, Rotter & Ooi 2011, Powder Technol.
+//   206, 269; model C): k_r = 2.25 kn mu_r^2 R*^2 (Eq. 15), spring moment updated
+//   incrementally M_k -= k_r w_r dt, limit |M_k| <= mu_r R* F_c (Eq. 13); viscous part
+//   M_d = -eta_r C_crit w_r with C_crit = 2 sqrt(I_r k_r), I_r = 1/(1/(I_i + m_i r_i^2) +
+//   1/(I_j + m_j r_j^2)) (Eqs. 17-18), switched off while the spring is at its limit.
+// CdtRolling: constant directional torque M = -mu_r R* F_c w_r/|w_r| (Zhou et al. 1999;
+//   Ai et al. 2011 model A). It chatters at rest; prefer EPSD for static packings.
+#pragma once
+#include <array>
+#include <cmath>
+
+#include "models/pair.hpp"
+#include "models/params.hpp"
+
+namespace cohdem {
+
+inline Vec3 rolling_rate(const PairGeom& g) { return g.wrel - g.n * dot(g.n, g.wrel); }
+
+struct NoRolling {
+  struct Params {};
+  struct State {};
+  static constexpr std::array<ParamSpec, 0> specs{};
+  static Params make(const ParamSet&, const PairMaterial&) { return {}; }
+  static Vec3 apply(const Params&, const PairGeom&, const NormalOut&, double, State&) { return {}; }
+};
+
+struct EpsdRolling {
+  struct Params { double mu_r, eta_r; };
+  struct State { Vec3 mk; };
+  static constexpr std::array specs = {
+      req("mu_r", "-", 0, kInf, "rolling friction coefficient"),
+      opt("eta_r", "-", 0.0, 0, kInf, "rolling viscous damping ratio (Ai et al. 2011 Eq. 17)")};
+  static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0]), p.get(specs[1])}; }
+  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double fc, State& s) {
+    const Vec3 wr = rolling_rate(g);
+    const double m0 = norm2(s.mk);
+    if (m0 > 0) {
+      s.mk -= g.n * dot(g.n, s.mk);
+      const double m1 = norm2(s.mk);
+      if (m1 > 0) s.mk *= std::sqrt(m0 / m1);
+    }
+    const double kr = 2.25 * no.kn * p.mu_r * p.mu_r * g.rstar * g.rstar;
+    s.mk -= wr * (kr * g.dt);
+    const double lim = p.mu_r * g.rstar * fc;
+    const double m2 = norm2(s.mk);
+    if (m2 > lim * lim) {
+      s.mk = m2 > 0 ? s.mk * (lim / std::sqrt(m2)) : Vec3{};
+      return s.mk;
+    }
+    if (p.eta_r > 0) {
+      const double Ir = 1.0 / (1.0 / (g.Ii + g.mi * g.ri * g.ri) + 1.0 / (g.Ij + g.mj * g.rj * g.rj));
+      return s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
+    }
+    return s.mk;
+  }
+};
+
+struct CdtRolling {
+  struct Params { double mu_r; };
+  struct State {};
+  static constexpr std::array specs = {req("mu_r", "-", 0, kInf, "rolling friction coefficient")};
+  static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0])}; }
+  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double fc, State&) {
+    const Vec3 wr = rolling_rate(g);
+    const double w = norm(wr);
+    if (w <= 0) return {};
+    return wr * (-p.mu_r * g.rstar * fc / w);
+  }
+};
+
+}  // namespace cohdem

@@ -1,0 +1,47 @@
+#include "particles/particle_store.hpp"
+
+namespace cohdem {
+
+namespace {
+template <class T>
+void apply_perm(std::vector<T>& a, const std::vector<uint32_t>& perm, std::vector<T>& tmp) {
+  tmp.resize(a.size());
+  for (size_t k = 0; k < perm.size(); ++k) tmp[k] = a[perm[k]];
+  a.swap(tmp);
+}
+template <class T>
+void compact(std::vector<T>& a, const std::vector<uint8_t>& remove) {
+  size_t w = 0;
+  for (size_t r = 0; r < a.size(); ++r)
+    if (!remove[r]) a[w++] = a[r];
+  a.resize(w);
+}
+}  // namespace
+
+void ParticleStore::permute(const std::vector<uint32_t>& perm) {
+  std::vector<uint64_t> tu;
+  std::vector<int32_t> ti;
+  std::vector<uint8_t> tb;
+  std::vector<double> td;
+  std::vector<Vec3> tv;
+  apply_perm(id, perm, tu);
+  apply_perm(species, perm, ti);
+  apply_perm(body, perm, ti);
+  apply_perm(flag, perm, tb);
+  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) apply_perm(*a, perm, td);
+  for (auto* a : {&x, &v, &omega, &force, &torque}) apply_perm(*a, perm, tv);
+}
+
+void ParticleStore::resize(size_t n) {
+  id.resize(n); species.resize(n); flag.resize(n); body.resize(n, -1);
+  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->resize(n);
+  for (auto* a : {&x, &v, &omega, &force, &torque}) a->resize(n);
+}
+
+void ParticleStore::erase_if_flagged(const std::vector<uint8_t>& remove) {
+  compact(id, remove); compact(species, remove); compact(flag, remove); compact(body, remove);
+  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) compact(*a, remove);
+  for (auto* a : {&x, &v, &omega, &force, &torque}) compact(*a, remove);
+}
+
+}  // namespace cohdem

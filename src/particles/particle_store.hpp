@@ -1,0 +1,61 @@
+// Particle data as a structure of arrays. Particles carry a stable 64-bit id that never
+// changes (contact history is keyed by ids, so it survives re-sorting and, later, MPI
+// migration); the local index changes whenever particles are re-sorted for locality.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace cohdem {
+
+enum ParticleFlag : uint8_t {
+  kFree = 0,
+  kFrozen = 1,    ///< does not move (rough base layers in chute benchmarks)
+  kAttached = 2,  ///< rigidly carried by wall `body[i]` (ribs, glued rough layers)
+};
+
+struct ParticleStore {
+  std::vector<uint64_t> id;
+  std::vector<int32_t> species;
+  std::vector<uint8_t> flag;
+  std::vector<int32_t> body;  ///< wall index for kAttached particles, -1 otherwise
+  std::vector<double> radius, radius0;  ///< current and reference (T0) radius, m
+  std::vector<double> mass, inertia;    ///< kg, kg m^2 (solid sphere 2/5 m r^2)
+  std::vector<Vec3> x, v, omega;        ///< position m, velocity m/s, angular velocity rad/s
+  std::vector<Vec3> force, torque;      ///< N, N m (contact + body forces, this step)
+  std::vector<double> temperature;      ///< K
+  std::vector<double> heat_flow;        ///< W (this step)
+
+  size_t size() const { return id.size(); }
+
+  /// Appends one particle; returns its local index.
+  size_t add(uint64_t pid, int32_t sp, double r, double density, const Vec3& pos,
+             const Vec3& vel = {}, const Vec3& w = {}, double temp = 293.15) {
+    id.push_back(pid);
+    species.push_back(sp);
+    flag.push_back(kFree);
+    body.push_back(-1);
+    radius.push_back(r);
+    radius0.push_back(r);
+    const double m = density * 4.0 / 3.0 * M_PI * r * r * r;
+    mass.push_back(m);
+    inertia.push_back(0.4 * m * r * r);
+    x.push_back(pos);
+    v.push_back(vel);
+    omega.push_back(w);
+    force.emplace_back();
+    torque.emplace_back();
+    temperature.push_back(temp);
+    heat_flow.push_back(0.0);
+    return id.size() - 1;
+  }
+
+  /// Reorders every array by `perm` (new index k takes old index perm[k]).
+  void permute(const std::vector<uint32_t>& perm);
+
+  void resize(size_t n);
+  void erase_if_flagged(const std::vector<uint8_t>& remove);
+};
+
+}  // namespace cohdem
