@@ -17,7 +17,8 @@ double restitution_of_beta(double beta, double p, bool limit) {
   double h = 1e-3;
   double x = 0, u = 1;
   int refine = 0;
-  for (long k = 0; k < 4000000; ++k) {
+  // Past t = 60 (twenty undamped contact times) the particle is taken as stuck (e = 0).
+  for (double t = 0; t < 60.0; t += h) {
     const double k1x = u, k1u = -force(x, u);
     const double k2x = u + 0.5 * h * k1u, k2u = -force(x + 0.5 * h * k1x, u + 0.5 * h * k1u);
     const double k3x = u + 0.5 * h * k2u, k3u = -force(x + 0.5 * h * k2x, u + 0.5 * h * k2u);

@@ -1,0 +1,55 @@
+// ContactModelImpl<Law>: the type-erased face of one compiled ContactLaw. compute() is
+// defined in sim/force_kernel.hpp (it needs the particle and pair-list types).
+#pragma once
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "models/contact_law.hpp"
+#include "models/registry.hpp"
+
+namespace cohdem {
+
+template <class Law>
+class ContactModelImpl final : public ContactModel {
+ public:
+  using Params = typename Law::Params;
+  using State = typename Law::State;
+  static_assert(std::is_trivially_copyable_v<State>, "contact history must be plain data");
+
+  explicit ContactModelImpl(std::string name) : name_(std::move(name)) {}
+  const std::string& name() const override { return name_; }
+  std::vector<ParamSpec> specs() const override { return Law::specs(); }
+  size_t state_size() const override { return sizeof(State); }
+  void set_params(int n, const std::vector<ParamSet>& sets, const std::vector<PairMaterial>& mats) override {
+    n_ = n;
+    params_.clear();
+    params_.reserve(size_t(n) * n);
+    for (int k = 0; k < n * n; ++k) params_.push_back(Law::make(sets[k], mats[k]));
+  }
+  double reach(int i, int j, double rstar) const override { return Law::reach(p(i, j), rstar); }
+  NormalOut normal_at(int i, int j, const PairGeom& g) const override {
+    typename Law::Normal::State s{};
+    NormalOut no;
+    Law::Normal::apply(p(i, j).normal, g, s, no);
+    return no;
+  }
+  bool evaluate(int i, int j, const PairGeom& g, void* state, PairForce& out) const override {
+    State s;
+    std::memcpy(&s, state, sizeof(State));
+    const bool alive = Law::evaluate(p(i, j), g, s, out);
+    std::memcpy(state, &s, sizeof(State));
+    return alive;
+  }
+  void compute(ForceContext& ctx) const override;
+
+  const Params& p(int i, int j) const { return params_[size_t(i) * n_ + j]; }
+  int n() const { return n_; }
+
+ private:
+  std::string name_;
+  int n_ = 0;
+  std::vector<Params> params_;
+};
+
+}  // namespace cohdem
