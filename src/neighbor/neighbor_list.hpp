@@ -1,0 +1,88 @@
+// Half neighbor list with a Verlet skin, built by cell binning, plus the wall-contact
+// candidates, and the contact history that rides on both.
+//
+// - Cells are at least (2 r_max + skin + reach) wide, so any size ratio is handled (each
+//   pair is tested against its own cutoff r_i + r_j + skin + reach).
+// - Each pair is stored once, oriented so that i has the LOWER id: the history (tangential
+//   spring, plastic overlap, ...) lives in one frame and never flips sign.
+// - Rows are CSR by i; a transposed index lets the force gather run per particle in a fixed
+//   order, so results do not depend on the number of threads.
+// - History is kept for live contacts only and carried over at each rebuild by matching
+//   (id_i, id_j) keys (sort-and-merge), so it survives rebuilds, re-sorting and (later) MPI
+//   migration. Wall contacts are keyed by (particle id, wall index).
+// - Periodic images: positions are wrapped at rebuilds only; each pair stores the image
+//   code of j so distances need no minimum-image test in the force loop.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec3.hpp"
+#include "particles/particle_store.hpp"
+#include "walls/wall.hpp"
+
+namespace cohdem {
+
+struct Domain {
+  Vec3 lo, hi;  ///< box bounds, m (required in periodic directions)
+  std::array<bool, 3> periodic{false, false, false};
+  Vec3 length() const { return hi - lo; }
+};
+
+/// Image shifts: code = (sx+1)*9 + (sy+1)*3 + (sz+1), shift = (sx Lx, sy Ly, sz Lz).
+constexpr uint8_t kNoImage = 13;
+
+struct HistoryArray {
+  size_t stride = 0;              ///< bytes per contact (ContactModel::state_size)
+  std::vector<std::byte> data;    ///< one slot per list entry
+  std::vector<uint8_t> live;      ///< 1 while the contact exists
+  void resize(size_t n) { data.assign(n * stride, std::byte{0}); live.assign(n, 0); }
+  void* at(size_t k) { return data.data() + k * stride; }
+};
+
+struct NeighborStats {
+  uint64_t builds = 0;
+  uint64_t lost_contacts = 0;  ///< live contacts whose pair left the list (should stay 0)
+};
+
+class NeighborList {
+ public:
+  // Pair rows (CSR by i, i has the lower id).
+  std::vector<uint32_t> start;   ///< n+1 offsets
+  std::vector<uint32_t> jdx;     ///< partner j
+  std::vector<uint8_t> image;    ///< image code of j
+  std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
+  std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
+  HistoryArray hist;
+
+  // Wall candidates (CSR by particle).
+  std::vector<uint32_t> wstart;
+  std::vector<uint16_t> wall;
+  HistoryArray whist;
+
+  std::array<Vec3, 27> shift{};  ///< image translations
+  NeighborStats stats;
+
+  /// Rebuilds the lists: wraps periodic positions, optionally re-sorts particles by cell
+  /// (applied to `p`), bins, finds pairs within r_i + r_j + skin + reach, finds wall
+  /// candidates, carries history over, and records the reference positions.
+  void build(ParticleStore& p, const std::vector<Wall>& walls, const Domain& dom, double skin,
+             double reach, bool resort);
+
+  /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
+  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
+
+  size_t pair_count() const { return jdx.size(); }
+  size_t wall_entry_count() const { return wall.size(); }
+  size_t live_contacts() const;
+
+ private:
+  std::vector<Vec3> x_ref_;
+  std::vector<double> r_ref_;
+  std::vector<Vec3> wall_ref_;
+  // scratch reused across builds
+  std::vector<uint32_t> cell_of_, cell_start_, cell_list_;
+};
+
+}  // namespace cohdem
