@@ -1,0 +1,246 @@
+#include "sim/system.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "sim/force_context.hpp"
+
+namespace cohdem {
+
+namespace {
+/// Rotates v about unit axis a by angle th (Rodrigues).
+Vec3 rotate(const Vec3& v, const Vec3& a, double th) {
+  const double c = std::cos(th), s = std::sin(th);
+  return v * c + cross(a, v) * s + a * (dot(a, v) * (1 - c));
+}
+}  // namespace
+
+void System::set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamSet>& pair_params) {
+  const int n = int(materials.size());
+  std::vector<PairMaterial> mats(size_t(n) * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const Material &a = materials[i], &b = materials[j];
+      if (a.E > 0 && b.E > 0) mats[i * n + j] = PairMaterial::make(a.E, a.nu, b.E, b.nu, false);
+    }
+  m->set_params(n, pair_params, mats);
+  model = std::move(m);
+  nl.hist.stride = nl.whist.stride = model->state_size();
+  dirty_ = true;
+}
+
+size_t System::add_particle(int species, double r, const Vec3& x, const Vec3& v, const Vec3& w) {
+  dirty_ = true;
+  return particles.add(next_id++, species, r, materials.at(species).density, x, v, w);
+}
+
+size_t System::insert(const InsertSpec& spec) {
+  const InsertResult res = insert_random(spec, rng, particles.x, particles.radius);
+  for (size_t k = 0; k < res.x.size(); ++k) add_particle(spec.species, res.r[k], res.x[k], spec.velocity);
+  return res.x.size();
+}
+
+void System::prepare() {
+  if (!model) throw RunError("no contact model set");
+  if (cfg.threads > 0) omp_set_num_threads(cfg.threads);
+  double rmax = 0;
+  for (double r : particles.radius) rmax = std::max(rmax, r);
+  for (const auto& p : pours) rmax = std::max(rmax, p.spec.size.max_radius());
+  reach_ = 0;
+  const int n = int(materials.size());
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) reach_ = std::max(reach_, model->reach(i, j, rmax));
+  const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
+  nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
+  compute_forces();
+  dirty_ = false;
+}
+
+void System::move_walls(double dt) {
+  for (size_t w = 0; w < walls.size(); ++w) {
+    Wall& W = walls[w];
+    const double w0 = 2 * M_PI * W.osc_frequency;
+    const Vec3 osc = W.osc_amplitude != 0
+                         ? W.osc_dir * (W.osc_amplitude * (std::sin(w0 * (time + dt)) - std::sin(w0 * time)))
+                         : Vec3{};
+    const Vec3 dx = W.velocity * dt + W.normal * (W.vn * dt) + osc;
+    W.point += dx;
+    W.center += dx;
+    if (W.control != WallControl::Prescribed) W.travel += W.vn * dt;
+  }
+  // Particles carried by walls (ribs, glued rough layers) move rigidly with them.
+  const long np = long(particles.size());
+  for (long i = 0; i < np; ++i) {
+    if (particles.flag[i] != kAttached) continue;
+    const Wall& W = walls[particles.body[i]];
+    const double wn = norm(W.omega);
+    Vec3 x = particles.x[i];
+    const double w0 = 2 * M_PI * W.osc_frequency;
+    const Vec3 osc = W.osc_amplitude != 0
+                         ? W.osc_dir * (W.osc_amplitude * (std::sin(w0 * (time + dt)) - std::sin(w0 * time)))
+                         : Vec3{};
+    const Vec3 dx = W.velocity * dt + W.normal * (W.vn * dt) + osc;
+    // W.center has already moved by dx: rotate about the old centre, then translate.
+    if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
+    particles.x[i] = x + dx;
+    particles.v[i] = W.velocity_at(particles.x[i], time + dt);
+    particles.omega[i] = W.omega;
+  }
+}
+
+void System::control_walls(double dt) {
+  for (Wall& W : walls) {
+    switch (W.control) {
+      case WallControl::Prescribed: break;
+      case WallControl::Servo: {
+        // Compressive load on the wall: particles push it against its normal.
+        const double load = -dot(W.force, W.normal);
+        W.vn = std::clamp(W.servo_gain * (W.target_force - load), -W.servo_vmax, W.servo_vmax);
+        break;
+      }
+      case WallControl::Spring: {
+        const double f = dot(W.force, W.normal) + W.spring_preload - W.spring_k * W.travel +
+                         W.mass * dot(cfg.gravity, W.normal);
+        W.vn += f / W.mass * dt;
+        break;
+      }
+    }
+  }
+}
+
+void System::do_pours() {
+  for (PourSource& s : pours) {
+    if (s.inserted >= s.spec.count || time < s.t_start || time < s.next_time) continue;
+    // Insert what the rate allows up to now, as far as the region has room.
+    const uint64_t due = std::min<uint64_t>(s.spec.count, uint64_t((time - s.t_start) * s.rate) + 1);
+    if (due <= s.inserted) continue;
+    InsertSpec batch = s.spec;
+    batch.count = due - s.inserted;
+    const InsertResult res = insert_random(batch, rng, particles.x, particles.radius, batch.count);
+    for (size_t k = 0; k < res.x.size(); ++k) add_particle(batch.species, res.r[k], res.x[k], batch.velocity);
+    s.inserted += res.x.size();
+    s.next_time = time + s.interval;
+  }
+}
+
+void System::compute_forces() {
+  const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
+  if (f_pair_.size() < np) { f_pair_.resize(np); ti_pair_.resize(np); tj_pair_.resize(np); }
+  if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
+  model->compute(ctx);
+
+  // Wall totals in a fixed order (deterministic).
+  for (Wall& W : walls) { W.force = {}; W.torque = {}; }
+  const size_t n = particles.size();
+  for (size_t i = 0; i < n; ++i) {
+    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
+      if (!nl.whist.live[e]) continue;
+      Wall& W = walls[nl.wall[e]];
+      W.force -= f_wall_[e];
+      W.torque += cross(c_wall_[e] - W.center, -f_wall_[e]) + tw_wall_[e];
+    }
+    if (particles.flag[i] == kAttached) {
+      Wall& W = walls[particles.body[i]];
+      W.force += particles.force[i];
+      W.torque += cross(particles.x[i] - W.center, particles.force[i]) + particles.torque[i];
+    }
+  }
+  // Body force.
+  const Vec3 g = cfg.gravity;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < long(n); ++i)
+    if (particles.flag[i] == kFree) particles.force[i] += g * particles.mass[i];
+}
+
+void System::step_once() {
+  if (dirty_) prepare();
+  const double dt = cfg.dt, h = 0.5 * dt;
+  ParticleStore& P = particles;
+  const long n = long(P.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    if (P.flag[i] != kFree) continue;
+    P.v[i] += P.force[i] * (h / P.mass[i]);
+    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+    P.x[i] += P.v[i] * dt;
+  }
+  move_walls(dt);
+  time += dt;
+  ++step;
+  if (!pours.empty()) {
+    const size_t before = P.size();
+    do_pours();
+    if (P.size() != before) dirty_ = true;
+  }
+  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin)) {
+    const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
+    nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
+    dirty_ = false;
+  }
+  compute_forces();
+  const long n2 = long(P.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n2; ++i) {
+    if (P.flag[i] != kFree) continue;
+    P.v[i] += P.force[i] * (h / P.mass[i]);
+    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+  }
+  control_walls(dt);
+}
+
+void System::run(uint64_t nsteps, const std::function<void(const System&)>& after_step) {
+  for (uint64_t s = 0; s < nsteps; ++s) {
+    step_once();
+    if (after_step) after_step(*this);
+  }
+}
+
+double System::kinetic_energy() const {
+  double e = 0;
+  for (size_t i = 0; i < particles.size(); ++i) {
+    if (particles.flag[i] != kFree) continue;
+    e += 0.5 * particles.mass[i] * norm2(particles.v[i]) + 0.5 * particles.inertia[i] * norm2(particles.omega[i]);
+  }
+  return e;
+}
+
+double System::rotational_energy() const {
+  double e = 0;
+  for (size_t i = 0; i < particles.size(); ++i)
+    if (particles.flag[i] == kFree) e += 0.5 * particles.inertia[i] * norm2(particles.omega[i]);
+  return e;
+}
+
+Vec3 System::momentum() const {
+  Vec3 m;
+  for (size_t i = 0; i < particles.size(); ++i)
+    if (particles.flag[i] == kFree) m += particles.v[i] * particles.mass[i];
+  return m;
+}
+
+size_t System::pair_contact_count() const {
+  size_t c = 0;
+  for (uint8_t l : nl.hist.live) c += l;
+  return c;
+}
+
+size_t System::contact_count() const { return nl.live_contacts(); }
+
+double System::max_relative_overlap() const {
+  double m = 0;
+  for (size_t i = 0; i + 1 < nl.start.size(); ++i)
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      if (!nl.hist.live[k]) continue;
+      const uint32_t j = nl.jdx[k];
+      const double d = particles.radius[i] + particles.radius[j] -
+                       norm(particles.x[i] - particles.x[j] - nl.shift[nl.image[k]]);
+      m = std::max(m, d / std::min(particles.radius[i], particles.radius[j]));
+    }
+  return m;
+}
+
+}  // namespace cohdem
