@@ -335,7 +335,7 @@ void read_contact_params(Section& s, ParamSet& p, const std::vector<ParamSpec>& 
     else if (auto i = n->value_exact<int64_t>()) v = double(*i);
     else if (auto b = n->value_exact<bool>()) v = *b ? 1.0 : 0.0;
     else s.fail(k, "expected a number");
-    p.set(k, v, {file, line_of(*n)});
+    p.set(k, v, {file, line_of(*n), s.path()});
   }
 }
 
@@ -355,6 +355,7 @@ Case parse(toml::table& root, const std::string& file) {
   {
     Section s = *top.table("simulation", true);
     c.cfg.dt = s.num("dt", std::nullopt, 0, kInf, true, "s");
+    c.dt_line = s.node("dt") ? line_of(*s.node("dt")) : s.line();
     c.duration = s.num("duration", std::nullopt, 0, kInf, false, "s");
     c.cfg.gravity = s.vec3("gravity", Vec3{0, 0, -9.81});
     c.cfg.skin = s.num("skin", 0.0, 0, kInf, false, "m");
@@ -520,6 +521,8 @@ Case parse(toml::table& root, const std::string& file) {
   int nins = 0;
   for (Section s : top.tables("insert")) {
     InsertStep st;
+    st.line = s.line();
+    st.key = s.path();
     st.spec.species = material_index(c, s, "material");
     if (!(c.materials[st.spec.species].density > 0))
       s.fail("material", "particles need a material with density > 0");
@@ -645,7 +648,12 @@ std::unique_ptr<System> build_system(const Case& c) {
       ps.next_time = st.start;
       s->pours.push_back(ps);
     } else {
-      s->insert(st.spec);
+      try {
+        s->insert(st.spec);
+      } catch (const RunError& e) {
+        // A fill that cannot fit is a problem of the case file: name the [[insert]].
+        throw InputError(c.file, st.line, st.key, e.what());
+      }
     }
   }
   return s;

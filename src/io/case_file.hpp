@@ -25,6 +25,8 @@ struct InsertStep {
   InsertSpec spec;
   bool pour = false;
   double rate = 0, start = 0, interval = 0;
+  int line = 0;       ///< where the [[insert]] is, for errors
+  std::string key;    ///< "insert[k]"
 };
 
 struct ExplicitParticle {
@@ -40,6 +42,7 @@ struct Case {
   std::string name;
   SimConfig cfg;
   double duration = 0;          ///< s
+  int dt_line = 0;              ///< line of simulation.dt, for audit errors
   uint64_t seed = 1;
   double audit_velocity = 0;    ///< m/s for the Hertz collision-time audit (0: derived)
   std::vector<Material> materials;

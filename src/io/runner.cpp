@@ -182,8 +182,12 @@ int run_case(const Case& c, const RunOptions& opt) {
   System& s = *sys;
   const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
   print_audit(audit);
-  if (audit.level == TimestepAudit::Error)
-    throw InputError(c.file, 0, "simulation.dt", "time step past its hard bound (see above); reduce dt");
+  if (audit.level == TimestepAudit::Error) {
+    std::string why;
+    for (const auto& m : audit.messages)
+      if (m.find("hard bound") != std::string::npos) why = m;
+    throw InputError(c.file, c.dt_line, "simulation.dt", "time step past its hard bound: " + why);
+  }
 
   const fs::path out = opt.out_dir.empty() ? fs::path(c.output.folder) : fs::path(opt.out_dir);
   fs::create_directories(out);
@@ -314,7 +318,7 @@ int check_case(const Case& c) {
   fmt::print("memory estimate: {:.1f} MiB ({:.0f} bytes per particle)\n", bytes / 1048576.0, per_particle + 8 * per_entry);
   for (const auto& m : a.messages) fmt::print("{}: {}\n", a.level == TimestepAudit::Error ? "error" : "warning", m);
   if (a.level == TimestepAudit::Error) {
-    fmt::print(stderr, "{}: key 'simulation.dt': time step past its hard bound\n", c.file);
+    fmt::print(stderr, "error: {}:{}: key 'simulation.dt': time step past its hard bound\n", c.file, c.dt_line);
     return 1;
   }
   fmt::print("ok\n");
