@@ -533,6 +533,7 @@ Case parse(toml::table& root, const std::string& file) {
     if (has_count) st.spec.count = uint64_t(s.integer("count", std::nullopt, 1));
     if (has_frac) st.spec.solids_fraction = s.num("solids_fraction", std::nullopt, 0, 0.74, true, "");
     st.spec.velocity = s.vec3("velocity", Vec3{});
+    st.spec.velocity_jitter = s.num("velocity_jitter", 0.0, 0, kInf, false, "m/s");
     st.spec.max_attempts = int(s.integer("max_attempts", 2000, 1));
     const std::string mode = s.str("mode", "fill", {"fill", "pour"});
     if (mode == "pour") {
