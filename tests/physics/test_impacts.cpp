@@ -4,7 +4,9 @@
 //   m* x'' + c x' + kn x = 0,  x(0) = 0, x'(0) = v0,
 //   x(t) = v0/omega_d exp(-zeta omega_0 t) sin(omega_d t),
 //   omega_0 = sqrt(kn/m*), omega_d = omega_0 sqrt(1 - zeta^2)
-// (e.g. Schwager & Poeschel 2007, Phys. Rev. E 75, 051304; Schwager & Poeschel 2008 Eq. 8).
+// (textbook damped oscillator; for DEM see Schwager & Poeschel 2007, Granular Matter 9:465,
+// "Coefficient of restitution and linear-dashpot model revisited", who also treat the contact
+// that ends at zero force).
 //  * Contact ends at zero overlap: t_c = pi/omega_d, e = exp(-zeta pi/sqrt(1 - zeta^2)).
 //  * Contact ends when the force kn x + c x' = -m* x'' reaches zero (limit_damping = 1; the
 //    damping may not pull). With x = A exp(-a t) sin(w t), a = zeta omega_0, w = omega_d:
@@ -23,7 +25,7 @@
 //    at constant speed e v0 from the overlap x(t_f) = 2 zeta e v0/omega_0 (both cases), so
 //    the overlap reaches zero at t_f + 2 zeta/omega_0.
 //
-// Hertz (Hertz 1882; Johnson 1985, Contact Mechanics, Sec. 11.1): F = 4/3 E* sqrt(R*) d^(3/2);
+// Hertz (Hertz 1882; Johnson 1985, Contact Mechanics, ch. 11): F = 4/3 E* sqrt(R*) d^(3/2);
 // energy balance 1/2 m* v^2 = 8/15 E* sqrt(R*) d_max^(5/2) gives
 //   d_max = (15 m* v^2/(16 E* sqrt(R*)))^(2/5),  F_max = 4/3 E* sqrt(R*) d_max^(3/2),
 //   t_c = 2 (d_max/v) int_0^1 dx/sqrt(1 - x^(5/2)) = 2 (d_max/v) (2/5) B(2/5, 1/2)
@@ -243,10 +245,11 @@ TEST(Impacts, HertzTsujiRestitutionSpeedIndependent) {
                              params({{"e", e}, {"mu", 0.0}, {"limit_damping", double(limit)}}), dt);
         const Outcome o = wall_impact(*s, r, v, 0);
         ASSERT_TRUE(o.tr.separated);
-        // The Tsuji damping force ~ delta^(1/4) v starts from zero (no jump at contact start),
-        // and the error is below the linear model's bound zeta omega_0 dt (~ 1.6e-3 for
-        // e = 0.2 at dt = t_c/1000). Tolerance 1e-3.
-        const double tol = 1e-3;
+        // The Tsuji damping force ~ delta^(1/4) v starts from zero (no jump at contact start);
+        // what remains is the damping's half-step velocity lag, O(beta omega dt) in e as for
+        // the linear model, with omega dt ~ pi/1000 and beta <= 0.67 for the e tested (0.67
+        // at e = 0.2 with limit_damping): 2.1e-3. Tolerance 2e-3.
+        const double tol = 2e-3;
         EXPECT_NEAR(o.e, e, tol) << "v=" << v << " e=" << e << " limit=" << limit;
         report(("Tsuji restitution v=" + std::to_string(v).substr(0, 3) + (limit ? " limit" : "") +
                 " e=" + std::to_string(e).substr(0, 3))

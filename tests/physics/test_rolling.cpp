@@ -1,8 +1,8 @@
 // A sphere launched sliding on a plane, and a sphere on an incline, with and without rolling
 // resistance, against rigid-body mechanics.
 //
-// Sliding then rolling (e.g. Goldstein-type textbook problem; Ai, Chen, Rotter & Ooi 2011,
-// Powder Technol. 206:269, Sec. 4.1 uses the same case). Sphere of mass m, radius R,
+// Sliding then rolling (rigid-body mechanics of a bowled ball; the rolling-resistance models
+// are those of Ai, Chen, Rotter & Ooi 2011, Powder Technol. 206:269). Sphere of mass m, radius R,
 // I = 2/5 m R^2, launched at v0 along +x without spin on a plane with normal +z, gravity -g z.
 // Friction (-mu m g along x at the contact point -R z) gives m v' = -mu m g and
 // I w' = mu m g R (w about +y); a rolling-resistance moment mu_r R N opposing w (both EPSD at its
@@ -13,7 +13,8 @@
 // (mu_r = 0: t1 = 2 v0/(7 mu g), v1 = 5 v0/7), after covering s1 = v0 t1 - mu g t1^2/2.
 // Rolling (v = R w) with friction force F along x: m v' = F, I w' = -R F - mu_r R m g, so
 // (I/R + m R) v' = -mu_r m g R and
-//   a = -v' = mu_r g/(1 + 2/5) = 5/7 mu_r g   (the friction needed, 5/7 mu_r m g, must stay below mu m g),
+//   a = -v' = mu_r g/(1 + 2/5) = 5/7 mu_r g
+// (the friction needed, 5/7 mu_r m g, stays below mu m g),
 // stopping after s2 = v1^2/(2 a) at t2 = t1 + v1/a.
 //
 // Incline at angle alpha (gravity tilted): rolling without slip needs friction 2/7 m g sin(alpha)
