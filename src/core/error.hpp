@@ -19,9 +19,18 @@ class InputError : public std::runtime_error {
   static std::string format(const std::string& file, int line, const std::string& key,
                             const std::string& what) {
     std::string s = file.empty() ? std::string("<input>") : file;
-    if (line > 0) s += ":" + std::to_string(line);
-    if (!key.empty()) s += ": key '" + key + "'";
-    return s + ": " + what;
+    if (line > 0) {
+      s += ':';
+      s += std::to_string(line);
+    }
+    if (!key.empty()) {
+      s += ": key '";
+      s += key;
+      s += '\'';
+    }
+    s += ": ";
+    s += what;
+    return s;
   }
   std::string file_;
   int line_;

@@ -40,6 +40,7 @@ constexpr ParamSpec req(const char* n, const char* u, double lo, double hi, cons
 struct ParamOrigin {
   std::string file;
   int line = 0;
+  std::string section;  ///< e.g. "contact" or "contact.pair[0]"
 };
 
 class ParamSet {
@@ -72,7 +73,7 @@ class ParamSet {
     const bool low_ok = spec.min_open ? v > spec.min : v >= spec.min;
     if (!(low_ok && v <= spec.max)) {
       const auto o = origin(spec.name);
-      throw InputError(o.file, o.line, spec.name,
+      throw InputError(o.file, o.line, o.section.empty() ? std::string(spec.name) : o.section + "." + spec.name,
                        "value " + num(v) + " out of range: expected " + (spec.min_open ? "(" : "[") +
                            num(spec.min) + ", " + num(spec.max) + "] " + spec.unit + " (" + spec.doc + ")");
     }

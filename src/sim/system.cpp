@@ -37,9 +37,15 @@ size_t System::add_particle(int species, double r, const Vec3& x, const Vec3& v,
   return particles.add(next_id++, species, r, materials.at(species).density, x, v, w);
 }
 
+Vec3 System::initial_velocity(const InsertSpec& spec) {
+  if (spec.velocity_jitter <= 0) return spec.velocity;
+  const double a = spec.velocity_jitter;
+  return spec.velocity + Vec3{rng.uniform(-a, a), rng.uniform(-a, a), rng.uniform(-a, a)};
+}
+
 size_t System::insert(const InsertSpec& spec) {
   const InsertResult res = insert_random(spec, rng, particles.x, particles.radius);
-  for (size_t k = 0; k < res.x.size(); ++k) add_particle(spec.species, res.r[k], res.x[k], spec.velocity);
+  for (size_t k = 0; k < res.x.size(); ++k) add_particle(spec.species, res.r[k], res.x[k], initial_velocity(spec));
   return res.x.size();
 }
 
@@ -120,7 +126,7 @@ void System::do_pours() {
     InsertSpec batch = s.spec;
     batch.count = due - s.inserted;
     const InsertResult res = insert_random(batch, rng, particles.x, particles.radius, batch.count);
-    for (size_t k = 0; k < res.x.size(); ++k) add_particle(batch.species, res.r[k], res.x[k], batch.velocity);
+    for (size_t k = 0; k < res.x.size(); ++k) add_particle(batch.species, res.r[k], res.x[k], initial_velocity(batch));
     s.inserted += res.x.size();
     s.next_time = time + s.interval;
   }

@@ -86,6 +86,7 @@ class System {
   void move_walls(double dt);
   void control_walls(double dt);
   void do_pours();
+  Vec3 initial_velocity(const InsertSpec& spec);
   double reach_ = 0;
   bool dirty_ = true;
   std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;

@@ -1,0 +1,663 @@
+#include "io/case_file.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "models/registry.hpp"
+
+namespace cohdem {
+
+namespace {
+
+int line_of(const toml::node& n) { return int(n.source().begin.line); }
+
+/// A TOML table read strictly: every key must be read, unknown keys are errors.
+class Section {
+ public:
+  Section(const toml::table& t, std::string path, const std::string& file)
+      : t_(t), path_(std::move(path)), file_(file) {}
+
+  const std::string& path() const { return path_; }
+  int line() const { return line_of(t_); }
+  bool has(const std::string& k) const { return t_.contains(k); }
+  std::string key(const std::string& k) const { return path_.empty() ? k : path_ + "." + k; }
+  [[noreturn]] void fail(const std::string& k, const std::string& what) const {
+    const toml::node* n = t_.get(k);
+    throw InputError(file_, n ? line_of(*n) : line(), key(k), what);
+  }
+
+  double num(const std::string& k, std::optional<double> def, double lo = -kInf, double hi = kInf,
+             bool lo_open = false, const char* unit = "") {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, std::string("missing required key (a number") + (*unit ? std::string(", ") + unit : "") + ")");
+      return *def;
+    }
+    double v;
+    if (auto d = n->value_exact<double>()) v = *d;
+    else if (auto i = n->value_exact<int64_t>()) v = double(*i);
+    else fail(k, std::string("expected a number, got ") + type_name(*n));
+    if (!std::isfinite(v)) fail(k, "expected a finite number");
+    const bool ok_lo = lo_open ? v > lo : v >= lo;
+    if (!ok_lo || v > hi) {
+      std::ostringstream s;
+      s << "value " << v << " out of range: expected " << (lo_open ? "> " : ">= ") << lo;
+      if (hi < kInf) s << " and <= " << hi;
+      if (*unit) s << " " << unit;
+      fail(k, s.str());
+    }
+    return v;
+  }
+  int64_t integer(const std::string& k, std::optional<int64_t> def, int64_t lo = 0) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, "missing required key (an integer)");
+      return *def;
+    }
+    auto i = n->value_exact<int64_t>();
+    if (!i) fail(k, std::string("expected an integer, got ") + type_name(*n));
+    if (*i < lo) fail(k, "value " + std::to_string(*i) + " out of range: expected >= " + std::to_string(lo));
+    return *i;
+  }
+  std::string str(const std::string& k, std::optional<std::string> def,
+                  const std::vector<std::string>& choices = {}) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, "missing required key (a string)");
+      return *def;
+    }
+    auto s = n->value_exact<std::string>();
+    if (!s) fail(k, std::string("expected a string, got ") + type_name(*n));
+    if (!choices.empty() && std::find(choices.begin(), choices.end(), *s) == choices.end())
+      fail(k, "unknown value '" + *s + "'; expected one of: " + join(choices));
+    return *s;
+  }
+  bool boolean(const std::string& k, std::optional<bool> def) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, "missing required key (true or false)");
+      return *def;
+    }
+    auto b = n->value_exact<bool>();
+    if (!b) fail(k, std::string("expected true or false, got ") + type_name(*n));
+    return *b;
+  }
+  std::vector<double> numbers(const std::string& k, std::optional<std::vector<double>> def, size_t count = 0) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, "missing required key (an array of numbers)");
+      return *def;
+    }
+    const toml::array* a = n->as_array();
+    if (!a) fail(k, std::string("expected an array of numbers, got ") + type_name(*n));
+    std::vector<double> v;
+    for (const auto& e : *a) {
+      if (auto d = e.value_exact<double>()) v.push_back(*d);
+      else if (auto i = e.value_exact<int64_t>()) v.push_back(double(*i));
+      else fail(k, "expected an array of numbers");
+      if (!std::isfinite(v.back())) fail(k, "expected finite numbers");
+    }
+    if (count && v.size() != count) fail(k, "expected " + std::to_string(count) + " numbers, got " + std::to_string(v.size()));
+    return v;
+  }
+  Vec3 vec3(const std::string& k, std::optional<Vec3> def) {
+    std::optional<std::vector<double>> d;
+    if (def) d = std::vector<double>{def->x, def->y, def->z};
+    auto v = numbers(k, d, 3);
+    return {v[0], v[1], v[2]};
+  }
+  std::vector<std::string> strings(const std::string& k, std::optional<std::vector<std::string>> def) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (!def) fail(k, "missing required key (an array of strings)");
+      return *def;
+    }
+    const toml::array* a = n->as_array();
+    if (!a) fail(k, std::string("expected an array of strings, got ") + type_name(*n));
+    std::vector<std::string> v;
+    for (const auto& e : *a) {
+      auto s = e.value_exact<std::string>();
+      if (!s) fail(k, "expected an array of strings");
+      v.push_back(*s);
+    }
+    return v;
+  }
+  std::optional<Section> table(const std::string& k, bool required = false) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (!n) {
+      if (required) fail(k, "missing required table");
+      return std::nullopt;
+    }
+    if (!n->is_table()) fail(k, std::string("expected a table, got ") + type_name(*n));
+    return Section(*n->as_table(), key(k), file_);
+  }
+  std::vector<Section> tables(const std::string& k) {
+    used_.insert(k);
+    std::vector<Section> v;
+    const toml::node* n = t_.get(k);
+    if (!n) return v;
+    const toml::array* a = n->as_array();
+    if (!a) fail(k, std::string("expected an array of tables ([[") + k + "]]), got " + type_name(*n));
+    int idx = 0;
+    for (const auto& e : *a) {
+      if (!e.is_table()) fail(k, "expected an array of tables");
+      v.emplace_back(*e.as_table(), key(k) + "[" + std::to_string(idx++) + "]", file_);
+    }
+    return v;
+  }
+  /// Marks a key as consumed by someone else (e.g. contact parameters).
+  void use(const std::string& k) { used_.insert(k); }
+  std::vector<std::string> keys() const {
+    std::vector<std::string> v;
+    for (auto&& [k, n] : t_) v.emplace_back(k.str());
+    return v;
+  }
+  const toml::node* node(const std::string& k) const { return t_.get(k); }
+  /// Errors on the first key that was never read.
+  void finish(const std::vector<std::string>& allowed_hint = {}) const {
+    for (auto&& [k, n] : t_) {
+      if (used_.count(std::string(k.str()))) continue;
+      std::vector<std::string> exp(allowed_hint);
+      if (exp.empty()) exp.assign(used_.begin(), used_.end());
+      throw InputError(file_, line_of(n), key(std::string(k.str())),
+                       "unknown key; expected one of: " + join(exp));
+    }
+  }
+  static std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+  }
+  static const char* type_name(const toml::node& n) {
+    switch (n.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array";
+      case toml::node_type::table: return "a table";
+      default: return "a date/time";
+    }
+  }
+
+ private:
+  const toml::table& t_;
+  std::string path_;
+  const std::string& file_;
+  std::set<std::string> used_;
+};
+
+/// Applies one --set override "a.b.c=value" (array-of-table elements by index or by name:
+/// "wall.floor.velocity=[0,0,1]" or "insert.0.count=100").
+void apply_override(toml::table& root, const std::string& kv) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set", 0, kv, "expected key=value, e.g. --set simulation.dt=1e-6");
+  const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
+  std::vector<std::string> parts;
+  {
+    std::stringstream ss(key);
+    std::string p;
+    while (std::getline(ss, p, '.')) parts.push_back(p);
+  }
+  // Parse the value as TOML; a bare word is taken as a string.
+  toml::table vt;
+  try {
+    vt = toml::parse("v = " + value);
+  } catch (const toml::parse_error&) {
+    try {
+      vt = toml::parse("v = \"" + value + "\"");
+    } catch (const toml::parse_error& e) {
+      throw InputError("--set", 0, key, "cannot read value '" + value + "'");
+    }
+  }
+  toml::node* cur = &root;
+  for (size_t k = 0; k + 1 < parts.size(); ++k) {
+    const std::string& p = parts[k];
+    if (auto* t = cur->as_table()) {
+      toml::node* next = t->get(p);
+      if (!next) {
+        t->insert(p, toml::table{});
+        next = t->get(p);
+      }
+      cur = next;
+    } else if (auto* a = cur->as_array()) {
+      toml::node* found = nullptr;
+      const bool numeric = !p.empty() && std::all_of(p.begin(), p.end(), ::isdigit);
+      if (numeric && std::stoul(p) < a->size()) found = a->get(std::stoul(p));
+      if (!numeric)
+        for (auto& e : *a)
+          if (auto* et = e.as_table(); et && et->get("name") && et->get("name")->value_exact<std::string>() == p)
+            found = &e;
+      if (!found) throw InputError("--set", 0, key, "no element '" + p + "' in array '" + parts[k - 1] + "'");
+      cur = found;
+    } else {
+      throw InputError("--set", 0, key, "'" + p + "' is not a table");
+    }
+  }
+  auto* t = cur->as_table();
+  if (!t) throw InputError("--set", 0, key, "cannot set a key inside a non-table");
+  t->insert_or_assign(parts.back(), *vt.get("v"));
+}
+
+SizeDistribution read_size(Section s) {
+  SizeDistribution d;
+  const std::string kind = s.str("distribution", std::nullopt, {"constant", "uniform", "gaussian", "list"});
+  if (kind == "constant") {
+    d.kind = SizeDistribution::Kind::Constant;
+    d.r = s.num("radius", std::nullopt, 0, kInf, true, "m");
+  } else if (kind == "uniform") {
+    d.kind = SizeDistribution::Kind::Uniform;
+    d.rmin = s.num("min", std::nullopt, 0, kInf, true, "m");
+    d.rmax = s.num("max", std::nullopt, d.rmin, kInf, false, "m");
+  } else if (kind == "gaussian") {
+    d.kind = SizeDistribution::Kind::Gaussian;
+    d.mean = s.num("mean", std::nullopt, 0, kInf, true, "m");
+    d.stddev = s.num("std", std::nullopt, 0, kInf, true, "m");
+    d.bound = s.num("bound", 0.1, 0, 1, true, "(fraction of the mean)");
+  } else {
+    d.kind = SizeDistribution::Kind::List;
+    d.radii = s.numbers("radii", std::nullopt);
+    d.weights = s.numbers("weights", std::vector<double>(d.radii.size(), 1.0));
+    if (d.radii.empty()) s.fail("radii", "expected at least one radius");
+    if (d.weights.size() != d.radii.size()) s.fail("weights", "expected one weight per radius");
+    for (double r : d.radii)
+      if (!(r > 0)) s.fail("radii", "radii must be > 0 m");
+    for (double w : d.weights)
+      if (!(w >= 0)) s.fail("weights", "weights must be >= 0");
+  }
+  s.finish();
+  return d;
+}
+
+Region read_region(Section s, const std::string& name) {
+  Region r;
+  r.name = name;
+  const std::string kind = s.str("type", std::nullopt, {"box", "cylinder", "annulus"});
+  if (kind == "box") {
+    r.kind = Region::Kind::Box;
+    r.lo = s.vec3("lo", std::nullopt);
+    r.hi = s.vec3("hi", std::nullopt);
+    for (int d = 0; d < 3; ++d)
+      if (!(r.hi[d] > r.lo[d])) s.fail("hi", "each component of hi must exceed lo");
+  } else {
+    r.kind = kind == "cylinder" ? Region::Kind::Cylinder : Region::Kind::Annulus;
+    const Vec3 c = s.vec3("center", Vec3{0, 0, 0});
+    r.center = c;
+    if (r.kind == Region::Kind::Annulus) {
+      r.r_in = s.num("r_inner", std::nullopt, 0, kInf, true, "m");
+      r.r_out = s.num("r_outer", std::nullopt, r.r_in, kInf, true, "m");
+    } else {
+      r.r_out = s.num("radius", std::nullopt, 0, kInf, true, "m");
+    }
+    r.zmin = s.num("zmin", std::nullopt, -kInf, kInf, false, "m");
+    r.zmax = s.num("zmax", std::nullopt, r.zmin, kInf, true, "m");
+  }
+  s.finish();
+  return r;
+}
+
+int material_index(const Case& c, Section& s, const std::string& key) {
+  const std::string name = s.str(key, std::nullopt);
+  for (size_t i = 0; i < c.materials.size(); ++i)
+    if (c.materials[i].name == name) return int(i);
+  std::vector<std::string> names;
+  for (const auto& m : c.materials) names.push_back(m.name);
+  s.fail(key, "unknown material '" + name + "'; defined materials: " + Section::join(names));
+}
+
+void read_contact_params(Section& s, ParamSet& p, const std::vector<ParamSpec>& specs,
+                         const std::set<std::string>& skip, const std::string& file, const std::string& model) {
+  std::vector<std::string> valid;
+  for (const auto& sp : specs) valid.push_back(sp.name);
+  for (const std::string& k : s.keys()) {
+    if (skip.count(k)) continue;
+    s.use(k);
+    if (std::find(valid.begin(), valid.end(), k) == valid.end())
+      s.fail(k, "not a parameter of contact model '" + model + "'; its parameters are: " + Section::join(valid));
+    const toml::node* n = s.node(k);
+    double v;
+    if (auto d = n->value_exact<double>()) v = *d;
+    else if (auto i = n->value_exact<int64_t>()) v = double(*i);
+    else if (auto b = n->value_exact<bool>()) v = *b ? 1.0 : 0.0;
+    else s.fail(k, "expected a number");
+    p.set(k, v, {file, line_of(*n), s.path()});
+  }
+}
+
+Case parse(toml::table& root, const std::string& file) {
+  Case c;
+  c.file = file;
+  Section top(root, "", file);
+
+  if (auto s = top.table("case")) {
+    c.name = s->str("name", "");
+    s->str("units", "SI", {"SI"});
+    s->str("description", "");
+    s->finish();
+  }
+
+  // [simulation]
+  {
+    Section s = *top.table("simulation", true);
+    c.cfg.dt = s.num("dt", std::nullopt, 0, kInf, true, "s");
+    c.dt_line = s.node("dt") ? line_of(*s.node("dt")) : s.line();
+    c.duration = s.num("duration", std::nullopt, 0, kInf, false, "s");
+    c.cfg.gravity = s.vec3("gravity", Vec3{0, 0, -9.81});
+    c.cfg.skin = s.num("skin", 0.0, 0, kInf, false, "m");
+    c.cfg.threads = int(s.integer("threads", 0));
+    c.cfg.sort_every = int(s.integer("sort_every", 20));
+    c.seed = uint64_t(s.integer("seed", 1));
+    c.audit_velocity = s.num("audit_velocity", 0.0, 0, kInf, false, "m/s");
+    s.finish();
+  }
+  // [domain]
+  top.use("domain");
+  if (const toml::node* dn = root.get("domain"); dn && dn->is_table()) {
+    Section s(*dn->as_table(), "domain", file);
+    c.cfg.domain.lo = s.vec3("lo", Vec3{0, 0, 0});
+    c.cfg.domain.hi = s.vec3("hi", Vec3{0, 0, 0});
+    s.use("periodic");
+    if (const toml::node* pn = s.node("periodic")) {
+      const toml::array* a = pn->as_array();
+      if (!a || a->size() != 3) s.fail("periodic", "expected [bool, bool, bool] for x, y, z");
+      for (size_t d = 0; d < 3; ++d) {
+        auto b = a->get(d)->value_exact<bool>();
+        if (!b) s.fail("periodic", "expected [bool, bool, bool] for x, y, z");
+        c.cfg.domain.periodic[d] = *b;
+        if (*b && !(c.cfg.domain.hi[int(d)] > c.cfg.domain.lo[int(d)]))
+          s.fail("hi", std::string("periodic in ") + "xyz"[d] + ": hi must exceed lo");
+      }
+    }
+    s.finish();
+  }
+
+  // [[material]]
+  for (Section s : top.tables("material")) {
+    Material m;
+    m.name = s.str("name", std::nullopt);
+    for (const auto& o : c.materials)
+      if (o.name == m.name) s.fail("name", "material '" + m.name + "' defined twice");
+    m.density = s.num("density", 0.0, 0, kInf, false, "kg/m^3");
+    m.E = s.num("youngs_modulus", 0.0, 0, kInf, false, "Pa");
+    m.nu = s.num("poisson_ratio", 0.25, -1, 0.5, true, "");
+    if (m.nu >= 0.5) s.fail("poisson_ratio", "Poisson ratio must be < 0.5");
+    s.finish();
+    c.materials.push_back(m);
+  }
+  if (c.materials.empty()) top.fail("material", "at least one [[material]] is required");
+  const int nm = int(c.materials.size());
+
+  // [contact]
+  {
+    Section s = *top.table("contact", true);
+    c.model = s.str("model", std::nullopt, contact_model_names());
+    c.rolling = s.str("rolling", "none", rolling_model_names());
+    auto m = make_contact_model(c.model, c.rolling, file, s.line());
+    const auto specs = m->specs();
+    ParamSet base;
+    base.set_context(file, s.line(), "contact");
+    read_contact_params(s, base, specs, {"model", "rolling", "pair"}, file, c.model);
+    c.pair_params.assign(size_t(nm) * nm, base);
+    for (Section ps : s.tables("pair")) {
+      const auto names = ps.strings("materials", std::nullopt);
+      if (names.size() != 2) ps.fail("materials", "expected two material names");
+      int idx[2];
+      for (int q = 0; q < 2; ++q) {
+        idx[q] = -1;
+        for (int i = 0; i < nm; ++i)
+          if (c.materials[i].name == names[q]) idx[q] = i;
+        if (idx[q] < 0) ps.fail("materials", "unknown material '" + names[q] + "'");
+      }
+      ParamSet p = base;
+      p.set_context(file, ps.line(), ps.path());
+      read_contact_params(ps, p, specs, {"materials"}, file, c.model);
+      c.pair_params[size_t(idx[0]) * nm + idx[1]] = p;
+      c.pair_params[size_t(idx[1]) * nm + idx[0]] = p;
+    }
+    s.finish();
+    // Validate every pair now (missing/out-of-range parameters are input errors).
+    System probe;
+    probe.materials = c.materials;
+    probe.set_model(std::move(m), c.pair_params);
+    // Models built on E* need E on both materials.
+    if (c.model == "hertz_mindlin")
+      for (const auto& mat : c.materials)
+        if (!(mat.E > 0))
+          throw InputError(file, 0, "material." + mat.name + ".youngs_modulus",
+                           "contact model '" + c.model + "' needs youngs_modulus > 0 for every material");
+  }
+
+  // [[wall]]
+  for (Section s : top.tables("wall")) {
+    Wall w;
+    w.name = s.str("name", std::nullopt);
+    const std::string type = s.str("type", std::nullopt, {"plane", "cylinder", "annulus"});
+    w.material = material_index(c, s, "material");
+    w.velocity = s.vec3("velocity", Vec3{});
+    w.omega = s.vec3("omega", Vec3{});
+    if (auto o = s.table("oscillation")) {
+      w.osc_amplitude = o->num("amplitude", std::nullopt, 0, kInf, false, "m");
+      w.osc_frequency = o->num("frequency", std::nullopt, 0, kInf, true, "Hz");
+      w.osc_dir = normalized(o->vec3("direction", Vec3{0, 0, 1}));
+      if (norm(w.osc_dir) == 0) o->fail("direction", "direction must be non-zero");
+      o->finish();
+    }
+    const std::string control = s.str("control", "prescribed", {"prescribed", "servo", "spring"});
+    std::vector<Wall> made;
+    if (type == "plane") {
+      w.shape = WallShape::Plane;
+      w.point = s.vec3("point", std::nullopt);
+      w.normal = s.vec3("normal", std::nullopt);
+      if (norm(w.normal) == 0) s.fail("normal", "normal must be non-zero");
+      w.normal = normalized(w.normal);
+      w.rmin = s.num("rmin", 0.0, 0, kInf, false, "m");
+      w.rmax = s.num("rmax", kInf, w.rmin, kInf, true, "m");
+      w.center = s.vec3("center", w.point);
+      made.push_back(w);
+    } else {
+      w.shape = WallShape::Cylinder;
+      w.point = s.vec3("point", Vec3{0, 0, 0});
+      w.normal = s.vec3("axis", Vec3{0, 0, 1});
+      if (norm(w.normal) == 0) s.fail("axis", "axis must be non-zero");
+      w.normal = normalized(w.normal);
+      w.zmin = s.num("zmin", -kInf, -kInf, kInf, false, "m");
+      w.zmax = s.num("zmax", kInf, w.zmin, kInf, true, "m");
+      w.center = s.vec3("center", w.point);
+      if (type == "cylinder") {
+        w.radius = s.num("radius", std::nullopt, 0, kInf, true, "m");
+        w.inside = s.str("side", "inside", {"inside", "outside"}) == "inside";
+        made.push_back(w);
+      } else {
+        const double ri = s.num("r_inner", std::nullopt, 0, kInf, true, "m");
+        const double ro = s.num("r_outer", std::nullopt, ri, kInf, true, "m");
+        Wall a = w, b = w;
+        a.name = w.name + "_inner"; a.radius = ri; a.inside = false;
+        b.name = w.name + "_outer"; b.radius = ro; b.inside = true;
+        made = {a, b};
+      }
+    }
+    for (Wall& m : made) {
+      // Rotation must keep the geometry (about the normal of a plane, the axis of a cylinder).
+      if (norm(m.omega) > 0 && norm(cross(m.omega, m.normal)) > 1e-12 * norm(m.omega))
+        s.fail("omega", "a wall may rotate only about its own normal (plane) or axis (cylinder)");
+      if (control != "prescribed") {
+        if (m.shape != WallShape::Plane) s.fail("control", "controlled walls must be planes");
+        m.control = control == "servo" ? WallControl::Servo : WallControl::Spring;
+      }
+    }
+    if (control == "servo") {
+      const double F = s.num("target_force", std::nullopt, 0, kInf, false, "N");
+      const double g = s.num("servo_gain", std::nullopt, 0, kInf, true, "m/(N s)");
+      const double vmax = s.num("servo_vmax", kInf, 0, kInf, true, "m/s");
+      for (Wall& m : made) { m.target_force = F; m.servo_gain = g; m.servo_vmax = vmax; }
+    } else if (control == "spring") {
+      const double mass = s.num("mass", std::nullopt, 0, kInf, true, "kg");
+      const double k = s.num("spring_k", std::nullopt, 0, kInf, false, "N/m");
+      const double pre = s.num("spring_preload", 0.0, -kInf, kInf, false, "N");
+      for (Wall& m : made) { m.mass = mass; m.spring_k = k; m.spring_preload = pre; }
+    }
+    s.finish();
+    for (const Wall& o : c.walls)
+      if (o.name == w.name) s.fail("name", "wall '" + w.name + "' defined twice");
+    for (Wall& m : made) c.walls.push_back(m);
+  }
+
+  // [[insert]]
+  int nins = 0;
+  for (Section s : top.tables("insert")) {
+    InsertStep st;
+    st.line = s.line();
+    st.key = s.path();
+    st.spec.species = material_index(c, s, "material");
+    if (!(c.materials[st.spec.species].density > 0))
+      s.fail("material", "particles need a material with density > 0");
+    st.spec.region = read_region(*s.table("region", true), s.path());
+    st.spec.size = read_size(*s.table("size", true));
+    const bool has_count = s.has("count"), has_frac = s.has("solids_fraction");
+    if (has_count == has_frac) s.fail("count", "give exactly one of count or solids_fraction");
+    if (has_count) st.spec.count = uint64_t(s.integer("count", std::nullopt, 1));
+    if (has_frac) st.spec.solids_fraction = s.num("solids_fraction", std::nullopt, 0, 0.74, true, "");
+    st.spec.velocity = s.vec3("velocity", Vec3{});
+    st.spec.velocity_jitter = s.num("velocity_jitter", 0.0, 0, kInf, false, "m/s");
+    st.spec.max_attempts = int(s.integer("max_attempts", 2000, 1));
+    const std::string mode = s.str("mode", "fill", {"fill", "pour"});
+    if (mode == "pour") {
+      st.pour = true;
+      if (!has_count) s.fail("count", "pouring needs a count");
+      st.rate = s.num("rate", std::nullopt, 0, kInf, true, "particles/s");
+      st.start = s.num("start", 0.0, 0, kInf, false, "s");
+      st.interval = s.num("interval", 0.0, 0, kInf, false, "s");
+    }
+    s.finish();
+    c.inserts.push_back(st);
+    ++nins;
+  }
+  // [[particle]]
+  for (Section s : top.tables("particle")) {
+    ExplicitParticle p;
+    p.material = material_index(c, s, "material");
+    if (!(c.materials[p.material].density > 0)) s.fail("material", "particles need a material with density > 0");
+    p.radius = s.num("radius", std::nullopt, 0, kInf, true, "m");
+    p.x = s.vec3("position", std::nullopt);
+    p.v = s.vec3("velocity", Vec3{});
+    p.omega = s.vec3("omega", Vec3{});
+    p.frozen = s.boolean("frozen", false);
+    if (s.has("attach_to")) {
+      const std::string wn = s.str("attach_to", std::nullopt);
+      for (size_t w = 0; w < c.walls.size(); ++w)
+        if (c.walls[w].name == wn) p.attach_wall = int(w);
+      if (p.attach_wall < 0) s.fail("attach_to", "unknown wall '" + wn + "'");
+    }
+    s.finish();
+    c.particles.push_back(p);
+  }
+  if (c.inserts.empty() && c.particles.empty())
+    top.fail("insert", "the case has no particles: add an [[insert]] or [[particle]]");
+
+  // [output]
+  if (auto s = top.table("output")) {
+    c.output.folder = s->str("folder", "out");
+    if (c.output.folder.empty()) s->fail("folder", "expected a non-empty folder name");
+    c.output.frame_interval = s->num("frame_interval", 0.0, 0, kInf, false, "s");
+    c.output.series_interval = s->num("series_interval", 0.0, 0, kInf, false, "s");
+    c.output.progress_interval = s->num("progress_interval", 5.0, 0, kInf, true, "s");
+    c.output.vtk = s->boolean("vtk", true);
+    c.output.probes = s->strings("probes", std::vector<std::string>{});
+    static const std::vector<std::string> known = {"kinetic_energy", "rotational_energy", "contacts",
+                                                   "max_overlap", "mean_velocity", "max_velocity",
+                                                   "coordination", "particles", "rebuilds", "bed_height"};
+    for (const auto& p : c.output.probes)
+      if (std::find(known.begin(), known.end(), p) == known.end())
+        s->fail("probes", "unknown probe '" + p + "'; known probes: " + Section::join(known));
+    s->finish();
+  }
+  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output"});
+
+  // Derived defaults.
+  double rmax = 0, rmin = kInf;
+  for (const auto& st : c.inserts) { rmax = std::max(rmax, st.spec.size.max_radius()); rmin = std::min(rmin, st.spec.size.min_radius()); }
+  for (const auto& p : c.particles) { rmax = std::max(rmax, p.radius); rmin = std::min(rmin, p.radius); }
+  if (c.cfg.skin == 0) c.cfg.skin = 0.2 * rmax;  // 10% of the largest diameter
+  return c;
+}
+
+Case finish_load(toml::table& root, const std::string& file, const std::vector<std::string>& overrides) {
+  for (const auto& o : overrides) apply_override(root, o);
+  return parse(root, file);
+}
+
+}  // namespace
+
+uint64_t Case::steps() const { return uint64_t(std::llround(duration / cfg.dt)); }
+
+Case load_case_file(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "", "cannot open case file");
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(path, int(e.source().begin.line), "", std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  return finish_load(root, path, overrides);
+}
+
+Case load_case_text(const std::string& text, const std::string& name, const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(name, int(e.source().begin.line), "", std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  return finish_load(root, name, overrides);
+}
+
+std::unique_ptr<System> build_system(const Case& c) {
+  auto s = std::make_unique<System>();
+  s->cfg = c.cfg;
+  s->materials = c.materials;
+  s->rng = Rng(c.seed);
+  s->set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
+  s->walls = c.walls;
+  for (const auto& p : c.particles) {
+    const size_t i = s->add_particle(p.material, p.radius, p.x, p.v, p.omega);
+    if (p.frozen) s->particles.flag[i] = kFrozen;
+    if (p.attach_wall >= 0) { s->particles.flag[i] = kAttached; s->particles.body[i] = p.attach_wall; }
+  }
+  for (const auto& st : c.inserts) {
+    if (st.pour) {
+      PourSource ps;
+      ps.spec = st.spec;
+      ps.rate = st.rate;
+      ps.t_start = st.start;
+      ps.interval = st.interval;
+      ps.next_time = st.start;
+      s->pours.push_back(ps);
+    } else {
+      try {
+        s->insert(st.spec);
+      } catch (const RunError& e) {
+        // A fill that cannot fit is a problem of the case file: name the [[insert]].
+        throw InputError(c.file, st.line, st.key, e.what());
+      }
+    }
+  }
+  return s;
+}
+
+}  // namespace cohdem

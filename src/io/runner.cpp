@@ -1,0 +1,328 @@
+#include "io/runner.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+#include "io/csv.hpp"
+#include "io/vtk.hpp"
+
+namespace cohdem {
+
+namespace fs = std::filesystem;
+
+std::vector<double> min_radius_by_material(const System& s) {
+  std::vector<double> r(s.materials.size(), 0.0);
+  auto take = [&](int m, double v) { r[m] = r[m] > 0 ? std::min(r[m], v) : v; };
+  for (size_t i = 0; i < s.particles.size(); ++i) take(s.particles.species[i], s.particles.radius[i]);
+  for (const auto& p : s.pours) take(p.spec.species, p.spec.size.min_radius());
+  return r;
+}
+
+double audit_velocity(const Case& c) {
+  if (c.audit_velocity > 0) return c.audit_velocity;
+  double v = 1.0;
+  const Vec3 L = c.cfg.domain.length();
+  double H = std::max({L.x, L.y, L.z});
+  for (const auto& st : c.inserts) {
+    v = std::max(v, norm(st.spec.velocity));
+    const Region& r = st.spec.region;
+    H = std::max(H, r.kind == Region::Kind::Box ? r.hi.z - r.lo.z : r.zmax - r.zmin);
+  }
+  for (const auto& w : c.walls) v = std::max(v, norm(w.velocity) + 2 * M_PI * w.osc_frequency * w.osc_amplitude);
+  return std::max(v, std::sqrt(2 * norm(c.cfg.gravity) * H));
+}
+
+namespace {
+
+std::string hms(double s) {
+  if (!std::isfinite(s) || s < 0) return "--:--:--";
+  const long t = long(s + 0.5);
+  char b[32];
+  std::snprintf(b, sizeof b, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  return b;
+}
+
+void print_audit(const TimestepAudit& a) {
+  if (a.rayleigh > 0) spdlog::info("Rayleigh time {:.4g} s ({}), dt/T_R = {:.3f}", a.rayleigh, a.rayleigh_material, a.dt / a.rayleigh);
+  if (a.collision > 0 && std::isfinite(a.collision))
+    spdlog::info("collision time {:.4g} s ({} at {:.3g} m/s): {:.1f} steps per collision", a.collision, a.collision_pair,
+                 a.velocity, a.collision / a.dt);
+  for (const auto& m : a.messages) {
+    if (a.level == TimestepAudit::Error) spdlog::error("time step: {}", m);
+    else spdlog::warn("time step: {}", m);
+  }
+}
+
+/// Extent of particles and walls, to size infinite wall meshes for ParaView.
+void scene_bounds(const System& s, Vec3& lo, Vec3& hi) {
+  lo = {INFINITY, INFINITY, INFINITY};
+  hi = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t i = 0; i < s.particles.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], s.particles.x[i][d] - s.particles.radius[i]);
+      hi[d] = std::max(hi[d], s.particles.x[i][d] + s.particles.radius[i]);
+    }
+  for (int d = 0; d < 3; ++d) {
+    if (s.cfg.domain.hi[d] > s.cfg.domain.lo[d]) { lo[d] = std::min(lo[d], s.cfg.domain.lo[d]); hi[d] = std::max(hi[d], s.cfg.domain.hi[d]); }
+    if (!(hi[d] >= lo[d])) { lo[d] = -1; hi[d] = 1; }
+  }
+}
+
+VtuData walls_vtu(const System& s) {
+  Vec3 lo, hi;
+  scene_bounds(s, lo, hi);
+  const double size = norm(hi - lo);
+  std::vector<VtuData> parts;
+  for (size_t w = 0; w < s.walls.size(); ++w) {
+    const Wall& W = s.walls[w];
+    VtuData d;
+    if (W.shape == WallShape::Plane) {
+      if (W.rmax < INFINITY || W.rmin > 0) d = disk_annulus(W.point, W.normal, W.rmin, std::isfinite(W.rmax) ? W.rmax : size);
+      else d = plane_patch(W.point, W.normal, 0.5 * size);
+    } else {
+      const double c0 = dot(0.5 * (lo + hi) - W.point, W.normal);
+      const double z0 = std::isfinite(W.zmin) ? W.zmin : c0 - 0.5 * size;
+      const double z1 = std::isfinite(W.zmax) ? W.zmax : c0 + 0.5 * size;
+      d = cylinder_surface(W.point, W.normal, W.radius, z0, z1);
+    }
+    d.fill_cell_int("wall_id", int32_t(w));
+    std::vector<double> fz(d.num_cells(), norm(W.force));
+    d.add_cell_scalar("force_magnitude", fz);
+    parts.push_back(std::move(d));
+  }
+  return merge(parts);
+}
+
+VtuData particles_frame(const System& s) {
+  const ParticleStore& P = s.particles;
+  VtuData d = particles_vtu(P.x);
+  d.add_point_id("id", P.id);
+  d.add_point_scalar("radius", P.radius);
+  d.add_point_int("species", P.species);
+  d.add_point_vector("velocity", P.v);
+  d.add_point_vector("omega", P.omega);
+  d.add_point_vector("force", P.force);
+  d.add_point_u8("flag", P.flag);
+  d.add_point_scalar("temperature", P.temperature);
+  return d;
+}
+
+struct Series {
+  std::vector<std::string> cols;
+  std::vector<double> row;
+};
+
+Series series_columns(const Case& c, const System& s) {
+  Series S;
+  S.cols = {"time", "step", "kinetic_energy", "contacts"};
+  for (const auto& p : c.output.probes)
+    if (p != "kinetic_energy" && p != "contacts") S.cols.push_back(p);
+  for (const Wall& w : s.walls) {
+    for (const char* q : {"fx", "fy", "fz", "tx", "ty", "tz"}) S.cols.push_back("wall." + w.name + "." + q);
+    if (w.control != WallControl::Prescribed) S.cols.push_back("wall." + w.name + ".travel");
+  }
+  return S;
+}
+
+double probe(const std::string& name, const System& s) {
+  const ParticleStore& P = s.particles;
+  if (name == "rotational_energy") return s.rotational_energy();
+  if (name == "max_overlap") return s.max_relative_overlap();
+  if (name == "particles") return double(P.size());
+  if (name == "rebuilds") return s.rebuild_count();
+  double sum = 0, mx = 0, top = -INFINITY;
+  size_t nf = 0;
+  for (size_t i = 0; i < P.size(); ++i) {
+    if (P.flag[i] != kFree) continue;
+    const double v = norm(P.v[i]);
+    sum += v;
+    mx = std::max(mx, v);
+    top = std::max(top, P.x[i].z + P.radius[i]);
+    ++nf;
+  }
+  if (name == "mean_velocity") return nf ? sum / nf : 0.0;
+  if (name == "max_velocity") return mx;
+  if (name == "bed_height") return nf ? top : 0.0;
+  if (name == "coordination") return nf ? 2.0 * double(s.pair_contact_count()) / double(nf) : 0.0;
+  return 0.0;
+}
+
+void fill_row(const Case& c, const System& s, Series& S) {
+  S.row = {s.time, double(s.step), s.kinetic_energy(), double(s.contact_count())};
+  for (const auto& p : c.output.probes)
+    if (p != "kinetic_energy" && p != "contacts") S.row.push_back(probe(p, s));
+  for (const Wall& w : s.walls) {
+    for (int d = 0; d < 3; ++d) S.row.push_back(w.force[d]);
+    for (int d = 0; d < 3; ++d) S.row.push_back(w.torque[d]);
+    if (w.control != WallControl::Prescribed) S.row.push_back(w.travel);
+  }
+}
+
+void check_finite(const System& s) {
+  const ParticleStore& P = s.particles;
+  for (size_t i = 0; i < P.size(); ++i)
+    if (!std::isfinite(P.x[i].x + P.x[i].y + P.x[i].z + P.v[i].x + P.v[i].y + P.v[i].z))
+      throw RunError("particle " + std::to_string(P.id[i]) + " has a non-finite position or velocity at step " +
+                     std::to_string(s.step) + " (t = " + std::to_string(s.time) +
+                     " s): the time step is too large for the contact stiffness, or a particle was inserted overlapping");
+}
+
+}  // namespace
+
+int run_case(const Case& c, const RunOptions& opt) {
+  using clock = std::chrono::steady_clock;
+  spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
+  auto sys = build_system(c);
+  System& s = *sys;
+  const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
+  print_audit(audit);
+  if (audit.level == TimestepAudit::Error) {
+    std::string why;
+    for (const auto& m : audit.messages)
+      if (m.find("hard bound") != std::string::npos) why = m;
+    throw InputError(c.file, c.dt_line, "simulation.dt", "time step past its hard bound: " + why);
+  }
+
+  const fs::path out = opt.out_dir.empty() ? fs::path(c.output.folder) : fs::path(opt.out_dir);
+  fs::create_directories(out);
+  const uint64_t nsteps = c.steps();
+  spdlog::info("{} particles, {} walls, {} steps of {:.3g} s ({:.4g} s), contact model {} (rolling {}), output in {}",
+               s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
+
+  s.prepare();
+  Series S = series_columns(c, s);
+  CsvWriter csv(out / "series.csv", S.cols);
+  PvdSeries pvd_p(out / "particles.pvd"), pvd_w(out / "walls.pvd");
+  int frame = 0;
+  auto write_frame = [&]() {
+    if (!c.output.vtk) return;
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_%05d.vtu", frame);
+    write_vtu(out / name, particles_frame(s));
+    pvd_p.add(s.time, name);
+    if (!s.walls.empty()) {
+      std::snprintf(name, sizeof name, "walls_%05d.vtu", frame);
+      write_vtu(out / name, walls_vtu(s));
+      pvd_w.add(s.time, name);
+    }
+    ++frame;
+  };
+  const uint64_t series_every =
+      c.output.series_interval > 0 ? std::max<uint64_t>(1, uint64_t(std::llround(c.output.series_interval / c.cfg.dt))) : 100;
+  const uint64_t frame_every =
+      c.output.frame_interval > 0 ? std::max<uint64_t>(1, uint64_t(std::llround(c.output.frame_interval / c.cfg.dt))) : 0;
+
+  fill_row(c, s, S);
+  csv.row(S.row);
+  write_frame();
+  const auto t0 = clock::now();
+  auto last = t0;
+  uint64_t particle_steps = 0;
+  for (uint64_t k = 1; k <= nsteps; ++k) {
+    s.step_once();
+    particle_steps += s.particles.size();
+    if (k % series_every == 0 || k == nsteps) {
+      check_finite(s);
+      fill_row(c, s, S);
+      csv.row(S.row);
+    }
+    if ((frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0))) write_frame();
+    const auto now = clock::now();
+    if (!opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval) {
+      last = now;
+      const double el = std::chrono::duration<double>(now - t0).count();
+      spdlog::info("step {}/{} ({:.0f}%)  t = {:.5g} s  N = {}  contacts {}  KE {:.4g} J  {:.3g} particle-steps/s  ETA {}",
+                   k, nsteps, 100.0 * k / nsteps, s.time, s.particles.size(), s.contact_count(), s.kinetic_energy(),
+                   particle_steps / el, hms(el / k * (nsteps - k)));
+    }
+  }
+  check_finite(s);
+  csv.flush();
+  const double wall_s = std::chrono::duration<double>(clock::now() - t0).count();
+  nlohmann::json j;
+  j["case"] = c.name;
+  j["case_file"] = c.file;
+  j["particles"] = s.particles.size();
+  j["steps"] = nsteps;
+  j["dt"] = c.cfg.dt;
+  j["simulated_time"] = s.time;
+  j["wall_time_s"] = wall_s;
+  j["particle_steps_per_s"] = wall_s > 0 ? double(particle_steps) / wall_s : 0.0;
+  j["kinetic_energy"] = s.kinetic_energy();
+  j["contacts"] = s.contact_count();
+  j["neighbor_builds"] = s.nl.stats.builds;
+  j["lost_contacts"] = s.nl.stats.lost_contacts;
+  j["frames"] = frame;
+  j["timestep_audit"] = {{"rayleigh_time", audit.rayleigh}, {"collision_time", audit.collision},
+                         {"audit_velocity", audit.velocity}};
+  for (const Wall& w : s.walls)
+    j["walls"][w.name] = {{"force", {w.force.x, w.force.y, w.force.z}}, {"torque", {w.torque.x, w.torque.y, w.torque.z}}};
+  write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  spdlog::info("done: {} steps in {:.2f} s ({:.3g} particle-steps/s), {} frames, final KE {:.4g} J, {} contacts",
+               nsteps, wall_s, double(j["particle_steps_per_s"]), frame, s.kinetic_energy(), s.contact_count());
+  return 0;
+}
+
+int check_case(const Case& c) {
+  System s;
+  s.cfg = c.cfg;
+  s.materials = c.materials;
+  s.set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
+  s.walls = c.walls;
+  std::vector<double> rmin(c.materials.size(), 0.0);
+  std::vector<double> count(c.materials.size(), 0.0), mass(c.materials.size(), 0.0);
+  auto take = [&](int m, double r) { rmin[m] = rmin[m] > 0 ? std::min(rmin[m], r) : r; };
+  for (const auto& st : c.inserts) {
+    const int m = st.spec.species;
+    take(m, st.spec.size.min_radius());
+    const double n = st.spec.count ? double(st.spec.count)
+                                   : std::floor(st.spec.solids_fraction * st.spec.region.volume() / st.spec.size.mean_volume());
+    count[m] += n;
+    mass[m] += n * st.spec.size.mean_volume() * c.materials[m].density;
+  }
+  for (const auto& p : c.particles) {
+    take(p.material, p.radius);
+    count[p.material] += 1;
+    mass[p.material] += 4.0 / 3.0 * M_PI * std::pow(p.radius, 3) * c.materials[p.material].density;
+  }
+  double total = 0;
+  fmt::print("case: {} ({})\n", c.name.empty() ? "(unnamed)" : c.name, c.file);
+  fmt::print("contact model: {} (rolling {}), {} bytes of history per contact\n", c.model, c.rolling, s.model->state_size());
+  for (size_t m = 0; m < c.materials.size(); ++m) {
+    if (count[m] == 0) continue;
+    total += count[m];
+    fmt::print("material {}: {:.0f} particles, smallest radius {:.4g} m, mean particle mass {:.4g} kg, total mass {:.4g} kg\n",
+               c.materials[m].name, count[m], rmin[m], mass[m] / count[m], mass[m]);
+  }
+  fmt::print("particles: {:.0f} (fills and explicit; pours included)\n", total);
+  fmt::print("steps: {} of dt = {:.4g} s for {:.4g} s simulated\n", c.steps(), c.cfg.dt, c.duration);
+  const auto a = audit_timestep(s, rmin, audit_velocity(c));
+  if (a.rayleigh > 0) fmt::print("Rayleigh time: {:.4g} s ({}), dt/T_R = {:.3f}\n", a.rayleigh, a.rayleigh_material, a.dt / a.rayleigh);
+  if (a.collision > 0 && std::isfinite(a.collision))
+    fmt::print("collision time: {:.4g} s ({} at {:.3g} m/s), {:.1f} steps per collision\n", a.collision, a.collision_pair,
+               a.velocity, a.collision / a.dt);
+  double crit = INFINITY;
+  if (a.rayleigh > 0) crit = std::min(crit, kWarnRayleigh * a.rayleigh);
+  if (a.collision > 0 && std::isfinite(a.collision)) crit = std::min(crit, a.collision / kWarnStepsPerCollision);
+  if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
+  // Memory: particle arrays plus ~8 list entries per particle (half list with skin).
+  const double per_particle = 8 + 4 + 1 + 4 + 8 * 8 + 24 * 7 + 8 + 24 + 8;
+  const double per_entry = 4 + 1 + 1 + 4 + 3 * 24 + double(s.model->state_size());
+  const double bytes = total * (per_particle + 8 * per_entry);
+  fmt::print("memory estimate: {:.1f} MiB ({:.0f} bytes per particle)\n", bytes / 1048576.0, per_particle + 8 * per_entry);
+  for (const auto& m : a.messages) fmt::print("{}: {}\n", a.level == TimestepAudit::Error ? "error" : "warning", m);
+  if (a.level == TimestepAudit::Error) {
+    fmt::print(stderr, "error: {}:{}: key 'simulation.dt': time step past its hard bound\n", c.file, c.dt_line);
+    return 1;
+  }
+  fmt::print("ok\n");
+  return 0;
+}
+
+}  // namespace cohdem

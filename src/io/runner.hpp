@@ -1,0 +1,28 @@
+// `cohdem run`: builds the system from a case, audits the time step, runs the time loop and
+// writes VTK frames, the CSV time series, a JSON summary and progress lines.
+#pragma once
+#include <string>
+
+#include "io/case_file.hpp"
+#include "sim/timestep_audit.hpp"
+
+namespace cohdem {
+
+struct RunOptions {
+  std::string out_dir;   ///< overrides [output] folder when not empty
+  bool quiet = false;    ///< no progress lines
+};
+
+/// Smallest particle radius of each material (particles present and pour sources).
+std::vector<double> min_radius_by_material(const System& s);
+/// Audit velocity: the case's, else max(1 m/s, sqrt(2 |g| H), insertion and wall speeds).
+double audit_velocity(const Case& c);
+
+/// Runs a case to completion. Throws InputError/RunError; returns the exit status.
+int run_case(const Case& c, const RunOptions& opt);
+
+/// `cohdem check`: validates and prints derived quantities; returns the exit status
+/// (0 ok, 1 time step past its hard bound).
+int check_case(const Case& c);
+
+}  // namespace cohdem
