@@ -56,13 +56,16 @@ inline double powe(double d, double n) {
   return std::pow(d, n);
 }
 
+/// An InputError about `key` of a parameter set, naming where the key was given.
+inline InputError param_error(const ParamSet& ps, const std::string& key, const std::string& what) {
+  const auto o = ps.origin(key);
+  return InputError(o.file, o.line, o.section.empty() ? key : o.section + "." + key, what);
+}
+
 /// An integer choice stored as a number in a ParamSet (0/1/2 ...), checked.
 inline int get_choice(const ParamSet& p, const ParamSpec& s) {
   const double v = p.get(s);
-  if (v != std::floor(v)) {
-    const auto o = p.origin(s.name);
-    throw InputError(o.file, o.line, s.name, std::string("expected an integer choice (") + s.doc + ")");
-  }
+  if (v != std::floor(v)) throw param_error(p, s.name, std::string("expected an integer choice (") + s.doc + ")");
   return int(v);
 }
 
@@ -155,11 +158,9 @@ struct HystereticNormal : NormalBase {
 
  protected:
   static void check_k2(const ParamSet& ps, const char* key, double k1, double k2) {
-    if (k2 < k1) {
-      const auto o = ps.origin(key);
-      throw InputError(o.file, o.line, key, "unloading stiffness must be >= k1 (k1 = " + std::to_string(k1) +
-                                                ", " + key + " = " + std::to_string(k2) + ")");
-    }
+    if (k2 < k1)
+      throw param_error(ps, key, "unloading stiffness must be >= k1 (k1 = " + std::to_string(k1) + ", " + key +
+                                     " = " + std::to_string(k2) + ")");
   }
 };
 
@@ -225,21 +226,15 @@ struct EepaNormal : HystereticNormal {
   static Params make(const ParamSet& ps, const PairMaterial& m) {
     Params p;
     const double lp = ps.get(specs[1]);
-    if (lp >= 1.0) {
-      const auto o = ps.origin("lambda_p");
-      throw InputError(o.file, o.line, "lambda_p", "plasticity ratio must be < 1 (k2 = k1 / (1 - lambda_p))");
-    }
+    if (lp >= 1.0) throw param_error(ps, "lambda_p", "plasticity ratio must be < 1 (k2 = k1 / (1 - lambda_p))");
     p.n = ps.get(specs[3]);
     p.x = ps.get(specs[4]);
     p.x_is_n = p.x == p.n;
     p.k1 = ps.get(specs[0]);
     p.ratio = lp;
     if (p.k1 == 0) {
-      if (p.n != 1.5) {
-        const auto o = ps.origin("n");
-        throw InputError(o.file, o.line, "k1", "k1 = 0 (Hertz coefficient) needs n = 1.5; give k1 for n = " +
-                                                   std::to_string(p.n));
-      }
+      if (p.n != 1.5)
+        throw param_error(ps, "k1", "k1 = 0 (Hertz coefficient) needs n = 1.5; give k1 for n = " + std::to_string(p.n));
       p.hertz_k1 = true;
       p.Estar = m.Estar;
     }
