@@ -66,12 +66,13 @@ int main(int argc, char** argv) {
     if (check->parsed()) return check_case(load(case_path, sets));
     if (models->parsed()) {
       for (const auto& name : contact_model_names()) {
-        auto m = make_contact_model(name, "epsd");
+        auto m = make_contact_model(name, "none");  // rolling keys: see the last line
         std::printf("%s\n", name.c_str());
         for (const auto& s : m->specs())
           std::printf("  %-16s %-10s %s%s\n", s.name, s.unit, s.doc, s.required ? " (required)" : "");
       }
-      std::printf("rolling: none, epsd (adds mu_r, eta_r), cdt (adds mu_r)\n");
+      std::printf("rolling: none, epsd (adds mu_r, eta_r), cdt (adds mu_r); walton: none (its bending moment "
+                  "fills the rolling slot)\n");
       return 0;
     }
   } catch (const InputError& e) {
