@@ -45,7 +45,7 @@ struct JkrNormal : NormalBase {
     const double c = std::sqrt(2.0 * M_PI * p.w / p.Estar);
     const double Rc = R * c, Ra = R * alpha;
     // x^4 >= 2 R alpha and x^3 >= 2 R c give g(x) >= 0: start right of the root.
-    double x = std::max(std::pow(2.0 * std::max(Ra, 0.0), 0.25), std::cbrt(2.0 * Rc));
+    double x = std::max(std::sqrt(std::sqrt(2.0 * std::max(Ra, 0.0))), std::cbrt(2.0 * Rc));
     for (int it = 0; it < 100; ++it) {
       const double x3 = x * x * x;
       const double gp = 4.0 * x3 - Rc;
