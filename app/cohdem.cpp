@@ -45,6 +45,9 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (overrides [output] folder)");
   run->add_option("--threads", threads, "OpenMP threads (overrides simulation.threads)")->check(CLI::NonNegativeNumber);
   run->add_flag("--quiet", quiet, "no progress lines");
+  std::string resume;
+  run->add_option("--resume", resume, "continue from a checkpoint (OUT/checkpoint.bin) of the same case")
+      ->check(CLI::ExistingFile);
 
   auto* check = app.add_subcommand("check", "validate a case and print derived quantities without running");
   check->add_option("case", case_path, "case file (TOML); the embedded default when omitted");
@@ -61,6 +64,7 @@ int main(int argc, char** argv) {
       RunOptions o;
       o.out_dir = out_dir;
       o.quiet = quiet;
+      o.resume = resume;
       return run_case(c, o);
     }
     if (check->parsed()) return check_case(load(case_path, sets));

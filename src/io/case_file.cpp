@@ -577,6 +577,7 @@ Case parse(toml::table& root, const std::string& file) {
     c.output.series_interval = s->num("series_interval", 0.0, 0, kInf, false, "s");
     c.output.progress_interval = s->num("progress_interval", 5.0, 0, kInf, true, "s");
     c.output.vtk = s->boolean("vtk", true);
+    c.output.checkpoint_interval = s->num("checkpoint_interval", 600.0, 0, kInf, false, "s");
     c.output.probes = s->strings("probes", std::vector<std::string>{});
     static const std::vector<std::string> known = {"kinetic_energy", "rotational_energy", "contacts",
                                                    "max_overlap", "mean_velocity", "max_velocity",
@@ -627,7 +628,7 @@ Case load_case_text(const std::string& text, const std::string& name, const std:
   return finish_load(root, name, overrides);
 }
 
-std::unique_ptr<System> build_system(const Case& c) {
+std::unique_ptr<System> build_system(const Case& c, bool fill) {
   auto s = std::make_unique<System>();
   s->cfg = c.cfg;
   s->materials = c.materials;
@@ -635,6 +636,7 @@ std::unique_ptr<System> build_system(const Case& c) {
   s->set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
   s->walls = c.walls;
   for (const auto& p : c.particles) {
+    if (!fill) break;
     const size_t i = s->add_particle(p.material, p.radius, p.x, p.v, p.omega);
     if (p.frozen) s->particles.flag[i] = kFrozen;
     if (p.attach_wall >= 0) { s->particles.flag[i] = kAttached; s->particles.body[i] = p.attach_wall; }
@@ -648,7 +650,7 @@ std::unique_ptr<System> build_system(const Case& c) {
       ps.interval = st.interval;
       ps.next_time = st.start;
       s->pours.push_back(ps);
-    } else {
+    } else if (fill) {
       try {
         s->insert(st.spec);
       } catch (const RunError& e) {

@@ -19,6 +19,7 @@ struct OutputSettings {
   std::vector<std::string> probes;  ///< extra CSV columns (see docs/case-file.md)
   double progress_interval = 5; ///< wall-clock s between progress lines
   bool vtk = true;
+  double checkpoint_interval = 600;  ///< wall-clock s between checkpoints (0: only at the end)
 };
 
 struct InsertStep {
@@ -64,6 +65,7 @@ Case load_case_text(const std::string& text, const std::string& name,
 
 /// Builds the system: materials, model, walls, explicit particles and fills (pours are
 /// registered to run during the time loop).
-std::unique_ptr<System> build_system(const Case& c);
+/// With fill = false, fills and explicit particles are skipped (a checkpoint supplies them).
+std::unique_ptr<System> build_system(const Case& c, bool fill = true);
 
 }  // namespace cohdem

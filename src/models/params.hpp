@@ -53,7 +53,7 @@ class ParamSet {
   const std::map<std::string, double>& values() const { return values_; }
   ParamOrigin origin(const std::string& key) const {
     auto it = origin_.find(key);
-    return it == origin_.end() ? ParamOrigin{file_, 0} : it->second;
+    return it == origin_.end() ? ParamOrigin{file_, 0, section_} : it->second;
   }
   /// Where this set as a whole comes from (used when a required key is missing).
   void set_context(std::string file, int line, std::string section) {
