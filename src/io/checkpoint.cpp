@@ -52,7 +52,7 @@ class In {
     const uint64_t n = pod<uint64_t>();
     need(n * sizeof(T));
     v.resize(n);
-    if (n) std::memcpy(v.data(), d_.data() + p_, n * sizeof(T));
+    if (n) std::memcpy(static_cast<void*>(v.data()), d_.data() + p_, n * sizeof(T));
     p_ += n * sizeof(T);
   }
   std::string str() {
