@@ -78,6 +78,7 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
+  if (const char* lv = std::getenv("COHDEM_LOG")) spdlog::set_level(spdlog::level::from_str(lv));
   try {
     if (run->parsed()) {
       if (threads > 0) sets.push_back("simulation.threads=" + std::to_string(threads));

@@ -383,7 +383,12 @@ Case parse(toml::table& root, const std::string& file) {
     s.finish();
     c.particles.push_back(p);
   }
-  if (c.inserts.empty() && c.particles.empty())
+  if (auto rs = top.table("ring_shear")) {
+    std::vector<std::string> names;
+    for (const auto& m : c.materials) names.push_back(m.name);
+    c.ring_shear = parse_ring_shear(*rs, names);
+  }
+  if (c.inserts.empty() && c.particles.empty() && !c.ring_shear)
     top.fail("insert", "the case has no particles: add an [[insert]] or [[particle]]");
 
   // [output]
@@ -404,7 +409,7 @@ Case parse(toml::table& root, const std::string& file) {
         s->fail("probes", "unknown probe '" + p + "'; known probes: " + Section::join(known));
     s->finish();
   }
-  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output"});
+  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output", "ring_shear"});
 
   // Derived defaults.
   double rmax = 0, rmin = kInf;
@@ -479,4 +484,8 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
   return s;
 }
 
+}  // namespace cohdem
+
+namespace cohdem {
+SizeDistribution read_size_distribution(Section s) { return read_size(std::move(s)); }
 }  // namespace cohdem

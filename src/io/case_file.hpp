@@ -6,6 +6,9 @@
 #include <utility>
 #include <vector>
 
+#include <optional>
+
+#include "apps/ring_shear_spec.hpp"
 #include "models/params.hpp"
 #include "particles/insertion.hpp"
 #include "sim/system.hpp"
@@ -53,6 +56,7 @@ struct Case {
   std::vector<InsertStep> inserts;
   std::vector<ExplicitParticle> particles;
   OutputSettings output;
+  std::optional<RingShearSpec> ring_shear;  ///< [ring_shear]: run the ring shear tester
 
   uint64_t steps() const;
 };

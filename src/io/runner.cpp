@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/checkpoint.hpp"
+#include "apps/ring_shear.hpp"
 #include <fstream>
 #include "io/csv.hpp"
 #include "io/vtk.hpp"
@@ -178,6 +179,10 @@ void check_finite(const System& s) {
 }  // namespace
 
 int run_case(const Case& c, const RunOptions& opt) {
+  if (c.ring_shear) {
+    if (!opt.resume.empty()) throw InputError("--resume", 0, "resume", "the ring shear procedure cannot be resumed yet");
+    return run_ring_shear(c, opt);
+  }
   using clock = std::chrono::steady_clock;
   spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
   const bool resuming = !opt.resume.empty();
@@ -340,6 +345,16 @@ int check_case(const Case& c) {
                                    : std::floor(st.spec.solids_fraction * st.spec.region.volume() / st.spec.size.mean_volume());
     count[m] += n;
     mass[m] += n * st.spec.size.mean_volume() * c.materials[m].density;
+  }
+  if (c.ring_shear) {
+    const RingShearSpec& r = *c.ring_shear;
+    const double area = r.cell == "shear_box" ? r.length * r.width : M_PI * (r.r_outer * r.r_outer - r.r_inner * r.r_inner);
+    const double n = std::ceil(r.packing_guess * area * r.bed_height / r.size.mean_volume());
+    take(r.material, r.size.min_radius());
+    count[r.material] += n;
+    mass[r.material] += n * r.size.mean_volume() * c.materials[r.material].density;
+    fmt::print("ring shear: {} cell, area {:.4g} m^2, sigma_pre {:.4g} Pa, {} shear points (plus rough layers)\n", r.cell, area,
+               r.sigma_pre, r.fractions.size());
   }
   for (const auto& p : c.particles) {
     take(p.material, p.radius);

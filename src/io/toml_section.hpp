@@ -202,4 +202,8 @@ class Section {
   std::set<std::string> used_;
 };
 
+struct SizeDistribution;
+/// Reads a `size = { distribution = ..., ... }` table (defined in case_file.cpp).
+SizeDistribution read_size_distribution(Section s);
+
 }  // namespace cohdem

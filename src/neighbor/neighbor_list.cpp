@@ -244,11 +244,12 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ++stats.builds;
 }
 
-bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
+bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
+                                 long parallel_min) const {
   if (x_ref_.size() != p.size()) return true;
   const long n = long(p.size());
   double dmax2 = 0, grow = 0;
-#pragma omp parallel for reduction(max : dmax2, grow) schedule(static)
+#pragma omp parallel for reduction(max : dmax2, grow) schedule(static) if (n > parallel_min)
   for (long i = 0; i < n; ++i) {
     if (p.flag[i] == kFrozen) continue;
     dmax2 = std::max(dmax2, norm2(p.x[i] - x_ref_[i]));

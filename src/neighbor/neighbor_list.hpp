@@ -71,7 +71,7 @@ class NeighborList {
              double reach, bool resort);
 
   /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
-  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
+  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin, long parallel_min = 0) const;
 
   size_t pair_count() const { return jdx.size(); }
   size_t wall_entry_count() const { return wall.size(); }

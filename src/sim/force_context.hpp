@@ -13,6 +13,7 @@ struct ForceContext {
   NeighborList& nl;
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
+  long parallel_min = 0;  ///< run on one thread below this many particles
   // Per-pair results (force on i, torques on i and j), valid where nl.hist.live[k].
   std::vector<Vec3>& f_pair;
   std::vector<Vec3>& ti_pair;

@@ -25,7 +25,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const double dt = c.dt;
 
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (n > c.parallel_min)
   for (long i = 0; i < n; ++i) {
     const Vec3 xi = P.x[i];
     const double ri = P.radius[i];
@@ -68,7 +68,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     }
   }
 
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > c.parallel_min)
   for (long i = 0; i < n; ++i) {
     Vec3 F, T;
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)

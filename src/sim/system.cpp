@@ -200,7 +200,7 @@ void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   if (f_pair_.size() < np) { f_pair_.resize(np); ti_pair_.resize(np); tj_pair_.resize(np); }
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, cfg.parallel_min, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
@@ -221,7 +221,7 @@ void System::compute_forces() {
   }
   // Body force.
   const Vec3 g = cfg.gravity;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
   for (long i = 0; i < long(n); ++i)
     if (particles.flag[i] == kFree) particles.force[i] += g * particles.mass[i];
 }
@@ -231,7 +231,7 @@ void System::step_once() {
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
     if (P.flag[i] != kFree) continue;
     P.v[i] += P.force[i] * (h / P.mass[i]);
@@ -246,14 +246,14 @@ void System::step_once() {
     do_pours();
     if (P.size() != before) dirty_ = true;
   }
-  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin)) {
+  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin, cfg.parallel_min)) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
   compute_forces();
   const long n2 = long(P.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
   for (long i = 0; i < n2; ++i) {
     if (P.flag[i] != kFree) continue;
     P.v[i] += P.force[i] * (h / P.mass[i]);

@@ -31,6 +31,9 @@ struct SimConfig {
   Domain domain;
   int sort_every = 20;      ///< re-sort particles by cell every N neighbor builds (0: never)
   int threads = 0;          ///< OpenMP threads (0: OpenMP default)
+  /// Below this many particles a step runs on one thread: the OpenMP fork/join cost outweighs
+  /// the work (results do not depend on the thread count either way).
+  long parallel_min = 4000;
 };
 
 /// Pouring: inserts `spec.count` particles over time at `rate` particles per second.

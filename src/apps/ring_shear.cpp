@@ -1,0 +1,466 @@
+#include "apps/ring_shear.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "analysis/yield_locus.hpp"
+#include "apps/ring_shear_spec.hpp"
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+#include "io/csv.hpp"
+#include "io/plot.hpp"
+#include "io/toml_section.hpp"
+#include "io/vtk.hpp"
+#include "sim/timestep_audit.hpp"
+
+namespace cohdem {
+
+namespace fs = std::filesystem;
+
+RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& materials) {
+  RingShearSpec r;
+  r.line = s.line();
+  auto mat = [&](const std::string& key) {
+    const std::string name = s.str(key, std::nullopt);
+    for (size_t i = 0; i < materials.size(); ++i)
+      if (materials[i] == name) return int(i);
+    s.fail(key, "unknown material '" + name + "'");
+  };
+  r.cell = s.str("cell", "shear_box", {"shear_box", "annulus"});
+  if (r.cell == "shear_box") {
+    r.length = s.num("length", std::nullopt, 0, kInf, true, "m");
+    r.width = s.num("width", r.length, 0, kInf, true, "m");
+  } else {
+    r.r_inner = s.num("r_inner", std::nullopt, 0, kInf, true, "m");
+    r.r_outer = s.num("r_outer", std::nullopt, r.r_inner, kInf, true, "m");
+  }
+  r.material = mat("material");
+  r.base_material = mat("base_material");
+  r.wall_material = r.cell == "annulus" ? mat("wall_material") : r.base_material;
+  r.size = read_size_distribution(*s.table("size", true));
+  r.bed_height = s.num("bed_height", std::nullopt, 0, kInf, true, "m");
+  r.packing_guess = s.num("packing_guess", 0.55, 0.2, 0.74, false, "");
+  r.rough_layers = s.boolean("rough_layers", true);
+  r.fill_kadh_fraction = s.num("fill_kadh_fraction", 0.1, 0, kInf, false, "(of k2)");
+  r.settle_time = s.num("settle_time", 1.0, 0, kInf, false, "s");
+  r.settle_velocity = s.num("settle_velocity", 0.05, 0, kInf, true, "m/s");
+  r.approach_speed = s.num("approach_speed", 0.2, 0, kInf, true, "m/s");
+  r.sigma_pre = s.num("sigma_pre", std::nullopt, 0, kInf, true, "Pa");
+  r.fractions = s.numbers("fractions", r.fractions);
+  if (r.fractions.size() < 2) s.fail("fractions", "at least two shear points are needed for a yield locus");
+  for (double f : r.fractions)
+    if (!(f > 0 && f < 1)) s.fail("fractions", "each fraction of sigma_pre must be in (0, 1)");
+  r.shear_velocity = s.num("shear_velocity", 0.02, 0, kInf, true, "m/s");
+  r.servo_speed = s.num("servo_speed", 0.02, 0, kInf, true, "m/s");
+  r.consolidate_time = s.num("consolidate_time", 0.05, 0, kInf, false, "s");
+  r.first_preshear_distance = s.num("first_preshear_distance", 0.01, 0, kInf, true, "m");
+  r.preshear_distance = s.num("preshear_distance", 0.005, 0, kInf, true, "m");
+  r.shear_distance = s.num("shear_distance", 0.005, 0, kInf, true, "m");
+  r.relax_time = s.num("relax_time", 0.01, 0, kInf, false, "s");
+  r.peak_drop = s.num("peak_drop", 0.03, 0, 1, true, "");
+  r.sample_interval = s.num("sample_interval", 0.0, 0, kInf, false, "s");
+  s.finish();
+  return r;
+}
+
+namespace {
+
+/// Rough layer: a random monolayer of spheres (2-D random sequential addition) resting on a
+/// plane at height z0 (below it when `below`), inside the cell's cross-section.
+void rough_layer(System& s, const RingShearSpec& r, double z0, bool below, int body, Rng& rng) {
+  const double rmax = r.size.max_radius();
+  std::vector<Vec3> placed;
+  std::vector<double> radii;
+  const double area = r.cell == "shear_box" ? r.length * r.width : M_PI * (r.r_outer * r.r_outer - r.r_inner * r.r_inner);
+  const size_t tries = size_t(200 * area / (M_PI * rmax * rmax));
+  for (size_t t = 0; t < tries; ++t) {
+    const double rad = r.size.sample(rng);
+    Vec3 x;
+    if (r.cell == "shear_box") {
+      x = {rng.uniform(0, r.length), rng.uniform(0, r.width), 0};
+    } else {
+      const double a = r.r_inner + rad, b = r.r_outer - rad;
+      const double rho = std::sqrt(rng.uniform(a * a, b * b)), th = rng.uniform(0, 2 * M_PI);
+      x = {rho * std::cos(th), rho * std::sin(th), 0};
+    }
+    x.z = below ? z0 - rad : z0 + rad;
+    bool ok = true;
+    for (size_t q = 0; q < placed.size() && ok; ++q) {
+      Vec3 d = x - placed[q];
+      if (r.cell == "shear_box") {  // periodic in x and y
+        d.x -= r.length * std::round(d.x / r.length);
+        d.y -= r.width * std::round(d.y / r.width);
+      }
+      ok = norm2(d) >= (rad + radii[q]) * (rad + radii[q]);
+    }
+    if (!ok) continue;
+    placed.push_back(x);
+    radii.push_back(rad);
+  }
+  for (size_t q = 0; q < placed.size(); ++q) {
+    const size_t i = s.add_particle(r.material, radii[q], placed[q]);
+    s.particles.flag[i] = body < 0 ? kFrozen : kAttached;
+    s.particles.body[i] = body;
+  }
+}
+
+struct Sample {
+  double t, x, sigma, tau, height, density;
+  int phase;
+};
+
+}  // namespace
+
+int run_ring_shear(const Case& c, const RunOptions& opt) {
+  using clock = std::chrono::steady_clock;
+  const RingShearSpec& r = *c.ring_shear;
+  const auto t_wall0 = clock::now();
+  const bool box = r.cell == "shear_box";
+  const double area = box ? r.length * r.width : M_PI * (r.r_outer * r.r_outer - r.r_inner * r.r_inner);
+  const double r_mean = box ? 0.0 : 0.5 * (r.r_inner + r.r_outer);
+  const double rmax = r.size.max_radius();
+
+  // --- System, walls, rough layers --------------------------------------------------------
+  auto sys = build_system(c);  // materials, model, [[wall]]s if any
+  System& s = *sys;
+  if (box) {
+    s.cfg.domain.lo = {0, 0, -1};
+    s.cfg.domain.hi = {r.length, r.width, 1};
+    s.cfg.domain.periodic = {true, true, false};
+  }
+  Wall base;
+  base.name = "base";
+  base.material = r.base_material;
+  base.point = {0, 0, 0};
+  base.normal = {0, 0, 1};
+  s.walls.push_back(base);
+  if (!box) {
+    Wall in, out;
+    in.name = "inner";
+    in.shape = out.shape = WallShape::Cylinder;
+    in.material = out.material = r.wall_material;
+    in.radius = r.r_inner;
+    in.inside = false;
+    out.name = "outer";
+    out.radius = r.r_outer;
+    out.inside = true;
+    s.walls.push_back(in);
+    s.walls.push_back(out);
+  }
+  // Fill: insert loosely into a tall region, enough particles for the target bed height.
+  const double layer = r.rough_layers ? 2 * rmax : 0.0;
+  const double n_target = r.packing_guess * area * r.bed_height / r.size.mean_volume();
+  const double h_insert = r.bed_height * r.packing_guess / 0.2;  // loose: random insertion jams near 0.3
+  const double lid_park = layer + h_insert + 4 * rmax;  // lid out of the way while filling
+  Wall lid;
+  lid.name = "lid";
+  lid.material = r.base_material;
+  lid.point = {box ? 0.5 * r.length : 0.0, box ? 0.5 * r.width : 0.0, lid_park};
+  lid.center = lid.point;
+  lid.normal = {0, 0, -1};
+  s.walls.push_back(lid);
+  const int lid_idx = int(s.walls.size()) - 1;
+  if (r.rough_layers) {
+    Rng rng(c.seed + 101);
+    rough_layer(s, r, 0.0, false, -1, rng);
+    rough_layer(s, r, lid_park, true, lid_idx, rng);
+  }
+  const size_t n_fixed = s.particles.size();
+  {
+    InsertSpec ins;
+    ins.species = r.material;
+    ins.size = r.size;
+    ins.count = uint64_t(std::ceil(n_target));
+    if (box) {
+      ins.region.kind = Region::Kind::Box;
+      ins.region.lo = {0, 0, layer};
+      ins.region.hi = {r.length, r.width, layer + h_insert};
+    } else {
+      ins.region.kind = Region::Kind::Annulus;
+      ins.region.r_in = r.r_inner;
+      ins.region.r_out = r.r_outer;
+      ins.region.zmin = layer;
+      ins.region.zmax = layer + h_insert;
+    }
+    ins.region.name = "ring_shear fill";
+    ins.max_attempts = 5000;
+    try {
+      s.insert(ins);
+    } catch (const RunError& e) {
+      throw InputError(c.file, r.line, "ring_shear.bed_height", e.what());
+    }
+  }
+  const size_t n_free = s.particles.size() - n_fixed;
+
+  // Full and filling parameters (adhesion reduced while filling, as the MEPA paper does).
+  const std::vector<ParamSet> full = c.pair_params;
+  std::vector<ParamSet> filling = full;
+  const bool has_kadh = std::any_of(full.begin(), full.end(), [](const ParamSet& p) { return p.has("kadh"); });
+  if (has_kadh)
+    for (auto& p : filling)
+      if (p.has("k2")) p.set("kadh", r.fill_kadh_fraction * p.values().at("k2"));
+  if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), filling);
+
+  // Time-step audit.
+  const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
+  for (const auto& m : audit.messages) spdlog::warn("time step: {}", m);
+  if (audit.level == TimestepAudit::Error) throw InputError(c.file, c.dt_line, "simulation.dt", "time step past its hard bound");
+
+  const fs::path out = opt.out_dir.empty() ? fs::path(c.output.folder) : fs::path(opt.out_dir);
+  fs::create_directories(out);
+  spdlog::info("ring shear ({}): {} particles + {} in rough layers, area {:.4g} m^2, sigma_pre {:.4g} Pa, dt {:.3g} s",
+               r.cell, n_free, n_fixed, area, r.sigma_pre, c.cfg.dt);
+
+  // --- Measurements ------------------------------------------------------------------------
+  Wall* L = &s.walls[lid_idx];
+  double sheared = 0;  // shear displacement of the lid (annulus: at the mean radius), m
+  int phase = 0;
+  std::vector<Sample> series;
+  std::vector<std::pair<double, std::string>> marks;
+  double free_mass = 0;
+  for (size_t i = n_fixed; i < s.particles.size(); ++i) free_mass += s.particles.mass[i];
+  auto sigma_now = [&] { return L->force.z / area; };
+  auto tau_now = [&] {
+    if (box) return std::fabs(L->force.x) / area;
+    return 3.0 * std::fabs(L->torque.z) / (2 * M_PI * (std::pow(r.r_outer, 3) - std::pow(r.r_inner, 3)));
+  };
+  auto height_now = [&] { return L->point.z - 2 * layer; };  // between the rough layers
+  const uint64_t sample_every =
+      r.sample_interval > 0 ? std::max<uint64_t>(1, uint64_t(r.sample_interval / c.cfg.dt)) : 200;
+  auto last_progress = clock::now();
+  auto advance = [&](double duration, const std::function<bool()>& stop = {}) {
+    const uint64_t n = uint64_t(std::llround(duration / c.cfg.dt));
+    for (uint64_t k = 0; k < n; ++k) {
+      s.step_once();
+      if (L->control != WallControl::Prescribed || norm(L->velocity) > 0 || norm(L->omega) > 0)
+        sheared += (box ? std::fabs(L->velocity.x) : std::fabs(L->omega.z) * r_mean) * c.cfg.dt;
+      if (s.step % sample_every == 0) {
+        const double h = height_now();
+        series.push_back({s.time, sheared, sigma_now(), tau_now(), h, h > 0 ? free_mass / (area * h) : 0.0, phase});
+        if (stop && stop()) return;
+      }
+      if (!opt.quiet && std::chrono::duration<double>(clock::now() - last_progress).count() > c.output.progress_interval) {
+        last_progress = clock::now();
+        const double el = std::chrono::duration<double>(last_progress - t_wall0).count();
+        spdlog::info("phase {}  t = {:.4g} s  shear {:.3g} mm  sigma {:.4g} Pa  tau {:.4g} Pa  lid z {:.4g} m  {:.3g} particle-steps/s", phase,
+                     s.time, 1e3 * sheared, sigma_now(), tau_now(), L->point.z, double(s.step) * s.particles.size() / el);
+      }
+    }
+  };
+  auto set_shear = [&](double v) {
+    if (box) L->velocity = {v, 0, 0};
+    else L->omega = {0, 0, v / r_mean};
+  };
+  auto set_sigma = [&](double sig) {
+    L->control = WallControl::Servo;
+    L->target_force = sig * area;
+    L->servo_gain = r.servo_speed / (r.sigma_pre * area);
+    L->servo_vmax = r.servo_speed;
+  };
+
+  // --- Procedure ---------------------------------------------------------------------------
+  s.prepare();
+  phase = 0;  // fill and settle: at least the free-fall time of the fill, then until calm
+  const double t_fall = std::sqrt(2 * h_insert / std::max(norm(c.cfg.gravity), 1e-12));
+  advance(std::min(t_fall, r.settle_time));
+  while (s.time < r.settle_time) {
+    double vmax = 0;
+    for (size_t i = n_fixed; i < s.particles.size(); ++i) vmax = std::max(vmax, norm(s.particles.v[i]));
+    if (vmax < r.settle_velocity) break;
+    advance(0.005);
+  }
+  marks.push_back({sheared, "settled"});
+  // Lower the lid onto the bed (rigidly with its rough layer) just above the 95th percentile
+  // of the particle tops (a few particles may still bounce), restore full adhesion.
+  std::vector<double> tops;
+  for (size_t i = n_fixed; i < s.particles.size(); ++i) tops.push_back(s.particles.x[i].z + s.particles.radius[i]);
+  std::sort(tops.begin(), tops.end());
+  const double top = tops.empty() ? layer : tops[size_t(0.95 * double(tops.size() - 1))];
+  const double drop = L->point.z - (top + layer + 0.5 * rmax);
+  L->point.z -= drop;
+  L->center.z -= drop;
+  for (size_t i = 0; i < s.particles.size(); ++i)
+    if (s.particles.flag[i] == kAttached) s.particles.x[i].z -= drop;
+  if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), full);
+  else s.prepare();
+  phase = 1;  // consolidation: approach fast until the lid carries 10% of the load, then servo
+  set_sigma(r.sigma_pre);
+  L->servo_vmax = r.approach_speed;
+  L->servo_gain = r.approach_speed / (r.sigma_pre * area);
+  spdlog::debug("lid at z = {:.5g} m, bed top (95%) {:.5g} m, vn {:.3g}", L->point.z, top, L->vn);
+  advance(1.0, [&] { return sigma_now() > 0.1 * r.sigma_pre; });
+  set_sigma(r.sigma_pre);
+  advance(r.consolidate_time);
+
+  struct Point { double sigma, tau, tau_pre, sigma_pre_meas; };
+  std::vector<Point> points;
+  std::vector<double> pre_tau, pre_sigma;
+  auto preshear = [&](double dist) {
+    phase = 2;
+    set_sigma(r.sigma_pre);
+    const double x0 = sheared;
+    const size_t first = series.size();
+    marks.push_back({sheared, "pre-shear"});
+    set_shear(r.shear_velocity);
+    advance(dist / r.shear_velocity);
+    set_shear(0);
+    // Steady value: mean over the last quarter of the pre-shear.
+    std::vector<double> t, tau, sig;
+    for (size_t q = first; q < series.size(); ++q) { t.push_back(series[q].t); tau.push_back(series[q].tau); sig.push_back(series[q].sigma); }
+    if (t.size() < 8) throw RunError("pre-shear too short to sample: raise preshear_distance or lower sample_interval");
+    const SteadyState st = steady_state_value(t, tau, t.front(), t.back(), 0.25, 0.05);
+    double sm = 0;
+    size_t ns = 0;
+    for (size_t q = t.size() * 3 / 4; q < t.size(); ++q) { sm += sig[q]; ++ns; }
+    pre_tau.push_back(st.mean);
+    pre_sigma.push_back(sm / ns);
+    if (!st.steady)
+      spdlog::warn("pre-shear {} not steady (relative drift {:.3f} over the last quarter): consider a longer preshear_distance",
+                   pre_tau.size(), st.relative_drift);
+    (void)x0;
+  };
+  preshear(r.first_preshear_distance);
+  for (double f : r.fractions) {
+    // Relieve to the lower normal stress at rest, then shear to failure.
+    phase = 3;
+    set_sigma(f * r.sigma_pre);
+    advance(r.relax_time);
+    phase = 4;
+    marks.push_back({sheared, "shear " + std::to_string(int(std::lround(100 * f))) + "%"});
+    set_shear(r.shear_velocity);
+    double tau_max = 0, sig_at_max = 0;
+    advance(r.shear_distance / r.shear_velocity, [&] {
+      const Sample& q = series.back();
+      if (q.tau > tau_max) { tau_max = q.tau; sig_at_max = q.sigma; }
+      return tau_max > 0 && q.tau < (1 - r.peak_drop) * tau_max;
+    });
+    set_shear(0);
+    points.push_back({sig_at_max, tau_max, pre_tau.back(), pre_sigma.back()});
+    spdlog::info("shear point {}: sigma = {:.4g} Pa, tau = {:.4g} Pa (pre-shear tau {:.4g} Pa)", points.size(), sig_at_max, tau_max,
+                 pre_tau.back());
+    // Pre-shear again before the next point (and at the end, for the last steady value).
+    phase = 3;
+    set_sigma(r.sigma_pre);
+    advance(r.relax_time);
+    preshear(r.preshear_distance);
+  }
+
+  // --- Evaluation --------------------------------------------------------------------------
+  double tp = 0, sp = 0;
+  for (size_t q = 0; q < pre_tau.size(); ++q) { tp += pre_tau[q]; sp += pre_sigma[q]; }
+  tp /= pre_tau.size();
+  sp /= pre_sigma.size();
+  std::vector<ShearPoint> sp_pts;
+  for (const auto& p : points) sp_pts.push_back({p.sigma, p.tau});
+  double mean_density = 0;
+  {
+    size_t n = 0;
+    for (const auto& q : series)
+      if (q.phase == 2) { mean_density += q.density; ++n; }
+    mean_density = n ? mean_density / n : 0;
+  }
+  nlohmann::json j;
+  j["cell"] = r.cell;
+  j["particles"] = n_free;
+  j["rough_layer_particles"] = n_fixed;
+  j["sigma_pre_target"] = r.sigma_pre;
+  j["pre_shear"] = {{"sigma", sp}, {"tau", tp}, {"tau_each", pre_tau}, {"sigma_each", pre_sigma}};
+  for (const auto& p : points) j["shear_points"].push_back({{"sigma", p.sigma}, {"tau", p.tau}});
+  j["bulk_density_preshear"] = mean_density;
+  const double d50 = 2 * std::cbrt(r.size.mean_volume() * 3 / (4 * M_PI));
+  const double rho_p = c.materials[r.material].density;
+  const double h_band = 10 * d50;
+  const double sig_low = r.fractions.front() * r.sigma_pre;
+  j["inertial_number"] = {{"shear_band_thickness", h_band},
+                          {"at_sigma_pre", r.shear_velocity / h_band * d50 / std::sqrt(r.sigma_pre / rho_p)},
+                          {"at_lowest_shear_point", r.shear_velocity / h_band * d50 / std::sqrt(sig_low / rho_p)}};
+  YieldLocusResult yl;
+  bool evaluated = false;
+  std::string eval_error;
+  try {
+    yl = evaluate_yield_locus({sp, tp}, sp_pts, mean_density);
+    evaluated = true;
+  } catch (const std::invalid_argument& e) {
+    eval_error = e.what();
+  }
+  const double deg = 180.0 / M_PI;
+  if (evaluated) {
+    j["yield_locus"] = {{"phi_lin_deg", yl.phi_lin * deg}, {"cohesion", yl.cohesion}, {"r_squared", yl.r_squared},
+                        {"sigma_1", yl.sigma_1}, {"sigma_2", yl.sigma_2}, {"sigma_c", yl.sigma_c},
+                        {"ffc", yl.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(yl.ffc)},
+                        {"phi_e_deg", yl.phi_e * deg}, {"phi_sf_deg", yl.phi_sf * deg}};
+  } else {
+    j["yield_locus"] = {{"error", eval_error}};
+  }
+  const double wall_s = std::chrono::duration<double>(clock::now() - t_wall0).count();
+  j["wall_time_s"] = wall_s;
+  j["steps"] = s.step;
+  j["simulated_time"] = s.time;
+  j["particle_steps_per_s"] = double(s.step) * double(s.particles.size()) / wall_s;
+  write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+  {
+    CsvWriter w(out / "series.csv", {"time", "shear_displacement", "sigma", "tau", "height", "bulk_density", "phase"});
+    for (const auto& q : series) w.row({q.t, q.x, q.sigma, q.tau, q.height, q.density, double(q.phase)});
+    CsvWriter p(out / "shear_points.csv", {"sigma", "tau", "sigma_pre", "tau_pre"});
+    for (const auto& q : points) p.row({q.sigma, q.tau, q.sigma_pre_meas, q.tau_pre});
+  }
+  // Plots.
+  try {
+    PlotSpec a;
+    a.title = "ring shear: shear stress against shear displacement";
+    a.xlabel = "shear displacement (mm)";
+    a.ylabel = "stress (kPa)";
+    Series st{"tau", {}, {}, "lines"}, sn{"sigma", {}, {}, "lines"};
+    for (const auto& q : series)
+      if (q.phase >= 1) { st.x.push_back(1e3 * q.x); st.y.push_back(1e-3 * q.tau); sn.x.push_back(1e3 * q.x); sn.y.push_back(1e-3 * q.sigma); }
+    a.series = {st, sn};
+    for (const auto& m : marks) a.vlines.push_back({1e3 * m.first, m.second});
+    a.width = 1100;
+    plot_png(out / "shear_curve.png", a);
+    PlotSpec b;
+    b.title = evaluated ? fmt::format("yield locus: phi_lin = {:.1f} deg, c = {:.3g} kPa, ffc = {}", yl.phi_lin * deg,
+                                      1e-3 * yl.cohesion, yl.ffc_infinite ? std::string("inf") : fmt::format("{:.2f}", yl.ffc))
+                        : "yield locus (evaluation failed: " + eval_error + ")";
+    b.xlabel = "normal stress sigma (kPa)";
+    b.ylabel = "shear stress tau (kPa)";
+    b.equal_axes = true;
+    Series pts{"shear points", {}, {}, "points"}, pre{"pre-shear", {1e-3 * sp}, {1e-3 * tp}, "points"};
+    for (const auto& q : points) { pts.x.push_back(1e-3 * q.sigma); pts.y.push_back(1e-3 * q.tau); }
+    b.series = {pts, pre};
+    if (evaluated) {
+      const double smax = std::max(yl.sigma_1, sp) * 1.1;
+      Series line{"yield locus", {0, 1e-3 * smax}, {1e-3 * yl.cohesion, 1e-3 * (yl.cohesion + std::tan(yl.phi_lin) * smax)}, "lines"};
+      b.series.push_back(line);
+      b.series.push_back(circle(1e-3 * 0.5 * (yl.sigma_1 + yl.sigma_2), 1e-3 * 0.5 * (yl.sigma_1 - yl.sigma_2), "steady-state flow", true));
+      if (yl.sigma_c > 0) b.series.push_back(circle(1e-3 * 0.5 * yl.sigma_c, 1e-3 * 0.5 * yl.sigma_c, "unconfined failure", true));
+    }
+    plot_png(out / "yield_locus.png", b);
+  } catch (const std::exception& e) {
+    spdlog::warn("plots not written: {}", e.what());
+  }
+  // Text summary.
+  fmt::print("\nring shear test ({}, {} particles, sigma_pre = {:.4g} kPa)\n", r.cell, n_free, 1e-3 * r.sigma_pre);
+  fmt::print("  pre-shear (steady state): sigma = {:.4g} kPa, tau = {:.4g} kPa\n", 1e-3 * sp, 1e-3 * tp);
+  for (size_t q = 0; q < points.size(); ++q)
+    fmt::print("  shear point {}: sigma = {:.4g} kPa, tau = {:.4g} kPa\n", q + 1, 1e-3 * points[q].sigma, 1e-3 * points[q].tau);
+  if (evaluated) {
+    fmt::print("  angle of internal friction (linearized yield locus) phi_lin = {:.2f} deg\n", yl.phi_lin * deg);
+    fmt::print("  cohesion c = {:.4g} kPa, unconfined yield strength sigma_c = {:.4g} kPa\n", 1e-3 * yl.cohesion, 1e-3 * yl.sigma_c);
+    fmt::print("  major consolidation stress sigma_1 = {:.4g} kPa, ffc = {}\n", 1e-3 * yl.sigma_1,
+               yl.ffc_infinite ? std::string("inf (no cohesion)") : fmt::format("{:.2f}", yl.ffc));
+    fmt::print("  effective angle of internal friction phi_e = {:.2f} deg, phi_sf = {:.2f} deg\n", yl.phi_e * deg, yl.phi_sf * deg);
+  } else {
+    fmt::print("  yield locus evaluation failed: {}\n", eval_error);
+  }
+  fmt::print("  bulk density during pre-shear {:.0f} kg/m^3; inertial number {:.2g} (sigma_pre) .. {:.2g} (lowest point)\n",
+             mean_density, double(j["inertial_number"]["at_sigma_pre"]), double(j["inertial_number"]["at_lowest_shear_point"]));
+  fmt::print("  {} steps in {:.1f} s ({:.3g} particle-steps/s); report in {}\n", s.step, wall_s, double(j["particle_steps_per_s"]),
+             out.string());
+  return 0;
+}
+
+}  // namespace cohdem
