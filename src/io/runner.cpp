@@ -2,9 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include <omp.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
@@ -173,6 +176,15 @@ void check_finite(const System& s) {
                      " s): the time step is too large for the contact stiffness, or a particle was inserted overlapping");
 }
 
+/// Peak resident memory of this process (VmHWM), bytes; 0 where /proc is not there.
+double peak_rss_bytes() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return 1024.0 * std::stod(line.substr(6));  // kB
+  return 0.0;
+}
+
 }  // namespace
 
 int run_case(const Case& c, const RunOptions& opt) {
@@ -251,6 +263,19 @@ int run_case(const Case& c, const RunOptions& opt) {
   j["wall_time_s"] = wall_s;
   j["particle_steps_per_s"] = wall_s > 0 ? double(particle_steps) / wall_s : 0.0;
   j["kinetic_energy"] = s.kinetic_energy();
+  {  // flow observables of the free particles (benchmarks compare them with peer codes)
+    double mfree = 0;
+    for (size_t i = 0; i < s.particles.size(); ++i)
+      if (s.particles.flag[i] == kFree) mfree += s.particles.mass[i];
+    const Vec3 p = s.momentum();
+    j["rotational_energy"] = s.rotational_energy();
+    j["translational_energy"] = s.kinetic_energy() - s.rotational_energy();
+    j["free_mass"] = mfree;
+    const double im = mfree > 0 ? 1.0 / mfree : 0.0;
+    j["mean_velocity"] = {p.x * im, p.y * im, p.z * im};
+  }
+  j["threads"] = omp_get_max_threads();
+  j["peak_rss_bytes"] = peak_rss_bytes();
   j["contacts"] = s.contact_count();
   j["neighbor_builds"] = s.nl.stats.builds;
   j["lost_contacts"] = s.nl.stats.lost_contacts;
