@@ -14,12 +14,14 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/error.hpp"
 #include "core/rng.hpp"
+#include "io/case_file.hpp"
 #include "models/registry.hpp"
 #include "sim/force_context.hpp"
 #include "sim/system.hpp"
@@ -150,6 +152,27 @@ void BM_NeighborBuildWithHistory(benchmark::State& st) {
   st.counters["lost_contacts"] = double(s->nl.stats.lost_contacts);
 }
 
+/// Whole steps of a case file (default: the chute, build/bench/chute.toml, made by
+/// bench/peer_compare.py or bench/lammps_data_to_case.py; override with COHDEM_BENCH_CASE).
+/// Skipped when the file is not there. Arg: threads.
+void BM_CaseStep(benchmark::State& st) {
+  const char* env = std::getenv("COHDEM_BENCH_CASE");
+  const std::string path = env ? env : "build/bench/chute.toml";
+  std::unique_ptr<System> s;
+  try {
+    const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
+    s = build_system(c);
+    s->prepare();
+  } catch (const std::exception& e) {
+    st.SkipWithError((path + ": " + e.what()).c_str());
+    return;
+  }
+  for (auto _ : st) s->step_once();
+  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
+  st.counters["contacts_per_particle"] = double(s->contact_count()) / double(s->particles.size());
+  st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
+}
+
 void register_all() {
   std::vector<ModelCase> cases = {{"linear", "none"}, {"linear", "epsd"}, {"hertz_mindlin", "none"},
                                   {"hertz_mindlin", "epsd"}};
@@ -166,6 +189,7 @@ void register_all() {
     benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c)->Arg(32)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
   }
+  benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_NeighborBuild", BM_NeighborBuild)->Arg(32)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_NeighborBuildWithHistory", BM_NeighborBuildWithHistory)
       ->Arg(32)->Unit(benchmark::kMicrosecond);
