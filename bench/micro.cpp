@@ -173,6 +173,12 @@ void BM_CaseStep(benchmark::State& st) {
   st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
 }
 
+/// COHDEM_BENCH_ITERS=N fixes the iteration count (for valgrind/callgrind comparisons).
+benchmark::internal::Benchmark* iters(benchmark::internal::Benchmark* b) {
+  if (const char* e = std::getenv("COHDEM_BENCH_ITERS")) b->Iterations(std::atol(e));
+  return b;
+}
+
 void register_all() {
   std::vector<ModelCase> cases = {{"linear", "none"}, {"linear", "epsd"}, {"hertz_mindlin", "none"},
                                   {"hertz_mindlin", "epsd"}};
@@ -186,10 +192,10 @@ void register_all() {
   }
   for (const auto& c : cases) {
     const std::string tag = std::string(c.model) + (std::string(c.rolling) == "none" ? "" : "+" + std::string(c.rolling));
-    benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c)->Arg(32)->Unit(benchmark::kMicrosecond);
+    iters(benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c))->Arg(32)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
   }
-  benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+  iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_NeighborBuild", BM_NeighborBuild)->Arg(32)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_NeighborBuildWithHistory", BM_NeighborBuildWithHistory)
       ->Arg(32)->Unit(benchmark::kMicrosecond);

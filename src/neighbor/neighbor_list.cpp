@@ -202,6 +202,15 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     for (size_t i = 0; i < n; ++i)
       for (uint32_t k = start[i]; k < start[i + 1]; ++k) rpair[fill[jdx[k]]++] = k;
   }
+  dep_lo.resize(n);
+  dep_hi.resize(n);
+  for (size_t i = 0; i < n; ++i) dep_lo[i] = dep_hi[i] = uint32_t(i);
+  for (size_t i = 0; i < n; ++i)
+    for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
+      const uint32_t j = jdx[k];
+      dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
+      dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
+    }
 
   // 5. Wall candidates.
   wstart.assign(n + 1, 0);

@@ -54,6 +54,9 @@ class NeighborList {
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
   std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
+  /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
+  /// kernel finishes a particle once rows dep_lo..dep_hi are done.
+  std::vector<uint32_t> dep_lo, dep_hi;
   HistoryArray hist;
 
   // Wall candidates (CSR by particle).

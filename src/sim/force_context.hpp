@@ -13,7 +13,9 @@ struct ForceContext {
   NeighborList& nl;
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
-  // Per-pair results (force on i, torques on i and j), valid where nl.hist.live[k].
+  // Per-pair results, valid where nl.hist.live[k]: the force on i (j gets its opposite) and
+  // the torque on j; the kernel sums i's side directly (ti_pair is kept for callers that
+  // want it but is not written by the bulk kernel).
   std::vector<Vec3>& f_pair;
   std::vector<Vec3>& ti_pair;
   std::vector<Vec3>& tj_pair;
@@ -22,6 +24,8 @@ struct ForceContext {
   std::vector<Vec3>& f_wall;
   std::vector<Vec3>& tw_wall;
   std::vector<Vec3>& c_wall;
+  /// Body-force acceleration added to every free particle after its contact forces, m/s^2.
+  Vec3 gravity{};
 };
 
 }  // namespace cohdem

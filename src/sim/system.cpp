@@ -128,12 +128,14 @@ void System::do_pours() {
 
 void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
-  if (f_pair_.size() < np) { f_pair_.resize(np); ti_pair_.resize(np); tj_pair_.resize(np); }
+  if (f_pair_.size() < np) { f_pair_.resize(np); tj_pair_.resize(np); }  // ti_pair_: unused by the kernel
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
+  // Gravity is added by the kernel, after the contact forces of each free particle.
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
+  if (walls.empty()) return;
   for (Wall& W : walls) { W.force = {}; W.torque = {}; }
   const size_t n = particles.size();
   for (size_t i = 0; i < n; ++i) {
@@ -149,11 +151,6 @@ void System::compute_forces() {
       W.torque += cross(particles.x[i] - W.center, particles.force[i]) + particles.torque[i];
     }
   }
-  // Body force.
-  const Vec3 g = cfg.gravity;
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < long(n); ++i)
-    if (particles.flag[i] == kFree) particles.force[i] += g * particles.mass[i];
 }
 
 void System::step_once() {
