@@ -196,12 +196,14 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   rstart.assign(n + 1, 0);
   for (uint32_t j : jdx) ++rstart[j + 1];
   for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
-  rpair.resize(jdx.size());
+  rslot.resize(jdx.size());
   {
     std::vector<uint32_t> fill(rstart.begin(), rstart.end() - 1);
     for (size_t i = 0; i < n; ++i)
-      for (uint32_t k = start[i]; k < start[i + 1]; ++k) rpair[fill[jdx[k]]++] = k;
+      for (uint32_t k = start[i]; k < start[i + 1]; ++k) rslot[k] = fill[jdx[k]]++;
   }
+  in_f.assign(jdx.size(), Vec3{});
+  in_tj.assign(jdx.size(), Vec3{});
   dep_lo.resize(n);
   dep_hi.resize(n);
   for (size_t i = 0; i < n; ++i) dep_lo[i] = dep_hi[i] = uint32_t(i);

@@ -88,7 +88,7 @@ class System {
   void do_pours();
   double reach_ = 0;
   bool dirty_ = true;
-  std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
+  std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
 };
 
 }  // namespace cohdem
