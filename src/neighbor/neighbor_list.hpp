@@ -8,7 +8,8 @@
 // - Rows are CSR by i; a transposed index lets the force gather run per particle in a fixed
 //   order, so results do not depend on the number of threads.
 // - History is kept for live contacts only and carried over at each rebuild by matching
-//   (id_i, id_j) keys (sort-and-merge), so it survives rebuilds, re-sorting and (later) MPI
+//   (id_i, id_j): the old row of the lower id is scanned for the partner (ids map to old
+//   rows through a table), so it survives rebuilds, re-sorting and (later) MPI
 //   migration. Wall contacts are keyed by (particle id, wall index).
 // - Periodic images: positions are wrapped at rebuilds only; each pair stores the image
 //   code of j so distances need no minimum-image test in the force loop.
@@ -89,7 +90,14 @@ class NeighborList {
   std::vector<double> r_ref_;
   std::vector<Vec3> wall_ref_;
   // scratch reused across builds
-  std::vector<uint32_t> cell_of_, cell_start_, cell_list_;
+  std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
+  std::vector<Wall> wide_;
+  // The previous lists during a build (swapped, not copied) and the ids of their rows.
+  std::vector<uint64_t> ids_, old_ids_;
+  std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, old_of_id_;
+  std::vector<uint16_t> old_wall_;
+  std::vector<std::byte> old_hist_, old_whist_;
+  std::vector<uint8_t> old_live_, old_wlive_;
 };
 
 }  // namespace cohdem
