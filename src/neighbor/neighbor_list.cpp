@@ -119,6 +119,21 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     const bool fixed_a = flag[a] != kFree;
     const Vec3 xa = x[a];
     const double ra = rad[a] + skin + reach;
+    // Candidates cell_list_[q0..q1) seen under image img.
+    auto scan = [&](uint32_t q0, uint32_t q1, uint8_t img) {
+      const Vec3 sh = shift[img];
+      for (uint32_t q = q0; q < q1; ++q) {
+        const uint32_t b = cell_list_[q];
+        if (id[b] <= ida) continue;                 // found from b's side (or b == a)
+        if (fixed_a && flag[b] != kFree) continue;  // two fixed bodies
+        const Vec3 d = xa - (x[b] + sh);
+        const double rc = ra + rad[b];
+        if (norm2(d) >= rc * rc) continue;
+        jdx.push_back(b);
+        image.push_back(img);
+      }
+    };
+    const bool x_inner = cx >= 1 && cx + 1 < nc[0];
     for (int oz = -1; oz <= 1; ++oz) {
       int z = cz + oz, sz = 0;
       if (z < 0 || z >= nc[2]) {
@@ -131,6 +146,11 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
           if (!dom.periodic[1]) continue;
           sy = y < 0 ? -1 : 1; y -= sy * nc[1];
         }
+        const size_t row0 = (size_t(z) * nc[1] + y) * nc[0];
+        if (x_inner) {  // the three cells along x are contiguous in cell_list_, one image
+          scan(cell_start_[row0 + cx - 1], cell_start_[row0 + cx + 2], uint8_t(9 + (sy + 1) * 3 + (sz + 1)));
+          continue;
+        }
         for (int ox = -1; ox <= 1; ++ox) {
           int xx = cx + ox, sx = 0;
           if (xx < 0 || xx >= nc[0]) {
@@ -139,20 +159,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
           }
           // In a periodic direction with nc = 1 or 2 one cell is visited under distinct
           // images (correct); out-of-range offsets in other directions are skipped.
-          const size_t cb = (size_t(z) * nc[1] + y) * nc[0] + xx;
-          // Image of b as seen from a: b + shift. The stored code is that of j = b.
-          const uint8_t img = uint8_t((sx + 1) * 9 + (sy + 1) * 3 + (sz + 1));
-          const Vec3 sh = shift[img];
-          for (uint32_t q = cell_start_[cb]; q < cell_start_[cb + 1]; ++q) {
-            const uint32_t b = cell_list_[q];
-            if (id[b] <= ida) continue;                   // found from b's side (or b == a)
-            if (fixed_a && flag[b] != kFree) continue;    // two fixed bodies
-            const Vec3 d = xa - (x[b] + sh);
-            const double rc = ra + rad[b];
-            if (norm2(d) >= rc * rc) continue;
-            jdx.push_back(b);
-            image.push_back(img);
-          }
+          // The image is that of b as seen from a (d = x_a - (x_b + shift)).
+          const size_t cb = row0 + xx;
+          scan(cell_start_[cb], cell_start_[cb + 1], uint8_t((sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)));
         }
       }
     }
