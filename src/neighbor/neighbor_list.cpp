@@ -1,5 +1,7 @@
 #include "neighbor/neighbor_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -102,17 +104,26 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   // 4. Pairs, straight into CSR rows: particle i scans its 27 neighbouring cells and keeps the
   //    partners with a higher id (so each pair is found once, in the row of its lower id,
   //    and the history frame never flips). Row order: cells in scan order, then cell order.
+  //    Parallel: each thread fills its own buffers for a contiguous block of rows; the
+  //    blocks are then concatenated in order, so the lists do not depend on the threads.
   start.resize(n + 1);
   start[0] = 0;
-  jdx.clear();
-  image.clear();
-  jdx.reserve(old_jdx_.size() + old_jdx_.size() / 8 + 16);
-  image.reserve(jdx.capacity());
   const uint64_t* const id = p.id.data();
   const uint8_t* const flag = p.flag.data();
   const Vec3* const x = p.x.data();
   const double* const rad = p.radius.data();
-  for (size_t a = 0; a < n; ++a) {
+  const int nthreads = omp_get_max_threads();
+  if (int(tl_jdx_.size()) < nthreads) { tl_jdx_.resize(nthreads); tl_img_.resize(nthreads); }
+  int team = 1;
+#pragma omp parallel num_threads(nthreads)
+  {
+  const int nt = omp_get_num_threads(), tid = omp_get_thread_num();
+  const size_t a0 = n * tid / nt, a1 = n * (tid + 1) / nt;
+  std::vector<uint32_t>& jdx = tl_jdx_[tid];
+  std::vector<uint8_t>& image = tl_img_[tid];
+  jdx.clear();
+  image.clear();
+  for (size_t a = a0; a < a1; ++a) {
     const size_t ca = cell_of_[a];
     const int cx = int(ca % nc[0]), cy = int((ca / nc[0]) % nc[1]), cz = int(ca / (size_t(nc[0]) * nc[1]));
     const uint64_t ida = id[a];
@@ -165,9 +176,24 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         }
       }
     }
-    start[a + 1] = uint32_t(jdx.size());
+    start[a + 1] = uint32_t(jdx.size());  // end of the row within this thread's buffer
   }
-  const size_t np = jdx.size();
+  if (tid == 0) team = nt;
+  }
+  size_t np = 0;
+  for (int t = 0; t < team; ++t) {
+    const size_t a0 = n * t / team, a1 = n * (t + 1) / team;
+    for (size_t a = a0; a < a1; ++a) start[a + 1] += uint32_t(np);
+    np += tl_jdx_[t].size();
+  }
+  jdx.resize(np);
+  image.resize(np);
+#pragma omp parallel for num_threads(team) schedule(static, 1)
+  for (int t = 0; t < team; ++t) {
+    const size_t off = start[n * t / team];
+    std::copy(tl_jdx_[t].begin(), tl_jdx_[t].end(), jdx.begin() + off);
+    std::copy(tl_img_[t].begin(), tl_img_[t].end(), image.begin() + off);
+  }
 
   // Transposed slots, dependency ranges of the force kernel, zeroed receive buffers.
   rstart.assign(n + 1, 0);
