@@ -100,7 +100,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       const double dist2 = hit_d[h][3];
       const double dist = std::sqrt(dist2);
       PairGeom g;
-      g.n = d / dist;
+      g.n = d * (1.0 / dist);  // one division, not three
       g.delta = rsum - dist;
       g.ri = ri;
       g.rj = rj;
