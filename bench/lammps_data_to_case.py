@@ -4,11 +4,12 @@ x y z [ix iy iz], optional Velocities: id vx vy vz wx wy wz) into a cohdem case:
 case (everything but the particles) followed by one [[particle]] table per atom.
 
   python3 bench/lammps_data_to_case.py DATA HEADER.toml -o CASE.toml [--types 1=flow,2=base]
-      [--frozen 2]
+      [--frozen 2] [--box xy]
 
 Atom types map to the header's materials (by default type k -> the k-th [[material]]);
 atoms of the --frozen types get frozen = true (LAMMPS: fix freeze). The material density
-must equal the atom's density (mass = density * pi d^3 / 6 in both codes). Python 3
+must equal the atom's density. --box xy adds a [domain] with the data file's box, periodic
+in the listed directions (the header must then have no [domain]). The density check: the (mass = density * pi d^3 / 6 in both codes). Python 3
 standard library only.
 """
 import argparse
@@ -21,13 +22,18 @@ def fail(msg):
 
 
 def read_data(path):
-    """Returns (atoms, velocities): atoms[id] = (type, diameter, density, x, y, z)."""
+    """Returns (atoms, velocities, box): atoms[id] = (type, diameter, density, x, y, z),
+    box = [(xlo, xhi), (ylo, yhi), (zlo, zhi)]."""
     with open(path) as f:
         lines = [l.split("#")[0].strip() for l in f]
     natoms = None
+    box = [None, None, None]
     for l in lines[1:40]:
         if l.endswith(" atoms"):
             natoms = int(l.split()[0])
+        for d, c in enumerate("xyz"):
+            if l.endswith(f"{c}lo {c}hi"):
+                box[d] = (float(l.split()[0]), float(l.split()[1]))
     if natoms is None:
         fail(f"{path}: no 'N atoms' line in the header")
     atoms, vel = {}, {}
@@ -53,7 +59,7 @@ def read_data(path):
             fail(f"{path}:{n}: section '{section}' is not supported")
     if len(atoms) != natoms:
         fail(f"{path}: header says {natoms} atoms, the Atoms section has {len(atoms)}")
-    return atoms, vel
+    return atoms, vel, box
 
 
 def main():
@@ -63,6 +69,7 @@ def main():
     ap.add_argument("-o", "--out", required=True)
     ap.add_argument("--types", default="", help="type=material,... (default: type k -> k-th material)")
     ap.add_argument("--frozen", default="2", help="comma-separated frozen atom types ('' for none)")
+    ap.add_argument("--box", default=None, help="add [domain] from the data box, periodic in these of x, y, z")
     a = ap.parse_args()
 
     with open(a.header, "rb") as f:
@@ -78,9 +85,17 @@ def main():
             tmap[int(t)] = name
     frozen = {int(t) for t in a.frozen.split(",") if t}
 
-    atoms, vel = read_data(a.data)
-    out = [open(a.header).read().rstrip("\n"), "",
-           f"# {len(atoms)} particles from {a.data} (bench/lammps_data_to_case.py)"]
+    atoms, vel, box = read_data(a.data)
+    out = [open(a.header).read().rstrip("\n"), ""]
+    if a.box is not None:
+        if "domain" in head:
+            fail(f"{a.header}: --box given but the header has a [domain]")
+        if None in box:
+            fail(f"{a.data}: no box (xlo xhi, ylo yhi, zlo zhi lines)")
+        per = ", ".join("true" if c in a.box else "false" for c in "xyz")
+        out += ["[domain]", f"lo = [{box[0][0]!r}, {box[1][0]!r}, {box[2][0]!r}]",
+                f"hi = [{box[0][1]!r}, {box[1][1]!r}, {box[2][1]!r}]", f"periodic = [{per}]", ""]
+    out.append(f"# {len(atoms)} particles from {a.data} (bench/lammps_data_to_case.py)")
     for aid in sorted(atoms):
         t, d, rho, x, y, z = atoms[aid]
         name = tmap.get(t) or (order[t - 1] if 0 < t <= len(order) else None)
