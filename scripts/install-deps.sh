@@ -10,7 +10,6 @@ PKGS=(
   nlohmann-json3-dev    # JSON summaries
   libgtest-dev libgmock-dev  # unit and physics tests
   libbenchmark-dev      # micro-benchmarks in bench/
-  libomp-dev            # OpenMP headers (g++ uses libgomp from gcc)
   gnuplot-nox           # PNG plots of results
 )
 missing=()

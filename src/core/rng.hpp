@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <sstream>
+#include <string>
 
 namespace cohdem {
 
@@ -25,6 +27,19 @@ class Rng {
     return r * std::cos(2.0 * M_PI * u2);
   }
   uint64_t next() { return eng_(); }
+  /// Full generator state as text (checkpoints).
+  std::string state() const {
+    std::ostringstream s;
+    s << eng_ << ' ' << has_spare_ << ' ' << std::hexfloat << spare_;
+    return s.str();
+  }
+  void set_state(const std::string& text) {
+    std::istringstream s(text);
+    s >> eng_ >> has_spare_;
+    std::string sp;
+    s >> sp;
+    spare_ = std::strtod(sp.c_str(), nullptr);
+  }
 
  private:
   std::mt19937_64 eng_;

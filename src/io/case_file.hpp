@@ -19,12 +19,15 @@ struct OutputSettings {
   std::vector<std::string> probes;  ///< extra CSV columns (see docs/case-file.md)
   double progress_interval = 5; ///< wall-clock s between progress lines
   bool vtk = true;
+  double checkpoint_interval = 600;  ///< wall-clock s between checkpoints (0: only at the end)
 };
 
 struct InsertStep {
   InsertSpec spec;
   bool pour = false;
   double rate = 0, start = 0, interval = 0;
+  int line = 0;       ///< where the [[insert]] is, for errors
+  std::string key;    ///< "insert[k]"
 };
 
 struct ExplicitParticle {
@@ -40,6 +43,7 @@ struct Case {
   std::string name;
   SimConfig cfg;
   double duration = 0;          ///< s
+  int dt_line = 0;              ///< line of simulation.dt, for audit errors
   uint64_t seed = 1;
   double audit_velocity = 0;    ///< m/s for the Hertz collision-time audit (0: derived)
   std::vector<Material> materials;
@@ -61,6 +65,7 @@ Case load_case_text(const std::string& text, const std::string& name,
 
 /// Builds the system: materials, model, walls, explicit particles and fills (pours are
 /// registered to run during the time loop).
-std::unique_ptr<System> build_system(const Case& c);
+/// With fill = false, fills and explicit particles are skipped (a checkpoint supplies them).
+std::unique_ptr<System> build_system(const Case& c, bool fill = true);
 
 }  // namespace cohdem

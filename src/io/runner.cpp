@@ -12,6 +12,8 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/checkpoint.hpp"
+#include <fstream>
 #include "io/csv.hpp"
 #include "io/vtk.hpp"
 
@@ -190,12 +192,21 @@ double peak_rss_bytes() {
 int run_case(const Case& c, const RunOptions& opt) {
   using clock = std::chrono::steady_clock;
   spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
-  auto sys = build_system(c);
+  const bool resuming = !opt.resume.empty();
+  auto sys = build_system(c, !resuming);
   System& s = *sys;
+  if (resuming) {
+    read_checkpoint(opt.resume, s);
+    spdlog::info("resuming from {} at step {} (t = {:.6g} s)", opt.resume, s.step, s.time);
+  }
   const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
   print_audit(audit);
-  if (audit.level == TimestepAudit::Error)
-    throw InputError(c.file, 0, "simulation.dt", "time step past its hard bound (see above); reduce dt");
+  if (audit.level == TimestepAudit::Error) {
+    std::string why;
+    for (const auto& m : audit.messages)
+      if (m.find("hard bound") != std::string::npos) why = m;
+    throw InputError(c.file, c.dt_line, "simulation.dt", "time step past its hard bound: " + why);
+  }
 
   const fs::path out = opt.out_dir.empty() ? fs::path(c.output.folder) : fs::path(opt.out_dir);
   fs::create_directories(out);
@@ -203,21 +214,57 @@ int run_case(const Case& c, const RunOptions& opt) {
   spdlog::info("{} particles, {} walls, {} steps of {:.3g} s ({:.4g} s), contact model {} (rolling {}), output in {}",
                s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
 
-  s.prepare();
+  if (!resuming) s.prepare();
   Series S = series_columns(c, s);
+  // On resume keep the rows and frames written up to the checkpoint.
+  std::vector<std::vector<double>> old_rows;
+  nlohmann::json frames = nlohmann::json::array();
+  if (resuming) {
+    if (fs::exists(out / "series.csv")) {
+      const CsvTable t = CsvTable::read(out / "series.csv");
+      if (t.has("step"))
+        for (size_t r = 0; r < t.num_rows(); ++r) {
+          if (t.column("step")[r] > double(s.step)) break;
+          std::vector<double> row;
+          for (const auto& col : S.cols) row.push_back(t.has(col) ? t.column(col)[r] : NAN);
+          old_rows.push_back(row);
+        }
+    }
+    if (fs::exists(out / "checkpoint.json")) {
+      std::ifstream f(out / "checkpoint.json");
+      frames = nlohmann::json::parse(f)["frames"];
+    }
+  }
   CsvWriter csv(out / "series.csv", S.cols);
+  for (const auto& r : old_rows) csv.row(r);
   PvdSeries pvd_p(out / "particles.pvd"), pvd_w(out / "walls.pvd");
   int frame = 0;
+  for (const auto& f : frames) {
+    if (f["time"].get<double>() > s.time) break;
+    pvd_p.add(f["time"].get<double>(), f["particles"].get<std::string>());
+    if (f.contains("walls")) pvd_w.add(f["time"].get<double>(), f["walls"].get<std::string>());
+    ++frame;
+  }
+  frames = nlohmann::json::array();
+  for (const auto& e : pvd_p.entries()) frames.push_back({{"time", e.time}, {"particles", e.file}});
+  for (size_t q = 0; q < pvd_w.entries().size() && q < frames.size(); ++q) frames[q]["walls"] = pvd_w.entries()[q].file;
+  auto checkpoint = [&]() {
+    write_checkpoint(out / "checkpoint.bin", s);
+    write_file_atomic(out / "checkpoint.json",
+                      nlohmann::json({{"step", s.step}, {"time", s.time}, {"frames", frames}}).dump(1) + "\n");
+  };
   auto write_frame = [&]() {
     if (!c.output.vtk) return;
     char name[64];
     std::snprintf(name, sizeof name, "particles_%05d.vtu", frame);
     write_vtu(out / name, particles_frame(s));
     pvd_p.add(s.time, name);
+    frames.push_back({{"time", s.time}, {"particles", name}});
     if (!s.walls.empty()) {
       std::snprintf(name, sizeof name, "walls_%05d.vtu", frame);
       write_vtu(out / name, walls_vtu(s));
       pvd_w.add(s.time, name);
+      frames.back()["walls"] = name;
     }
     ++frame;
   };
@@ -226,13 +273,17 @@ int run_case(const Case& c, const RunOptions& opt) {
   const uint64_t frame_every =
       c.output.frame_interval > 0 ? std::max<uint64_t>(1, uint64_t(std::llround(c.output.frame_interval / c.cfg.dt))) : 0;
 
-  fill_row(c, s, S);
-  csv.row(S.row);
-  write_frame();
+  if (!resuming) {
+    fill_row(c, s, S);
+    csv.row(S.row);
+    write_frame();
+  }
   const auto t0 = clock::now();
-  auto last = t0;
+  auto last = t0, last_ck = t0;
   uint64_t particle_steps = 0;
-  for (uint64_t k = 1; k <= nsteps; ++k) {
+  const uint64_t first_step = s.step + 1;
+  for (uint64_t k = first_step; k <= nsteps; ++k) {
+    const uint64_t builds = s.nl.stats.builds;
     s.step_once();
     particle_steps += s.particles.size();
     if (k % series_every == 0 || k == nsteps) {
@@ -242,16 +293,24 @@ int run_case(const Case& c, const RunOptions& opt) {
     }
     if ((frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0))) write_frame();
     const auto now = clock::now();
+    // Checkpoints at the end of a rebuild step, so a restart continues bit for bit.
+    if (c.output.checkpoint_interval > 0 && s.nl.stats.builds != builds &&
+        std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval) {
+      checkpoint();
+      last_ck = now;
+    }
     if (!opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval) {
       last = now;
       const double el = std::chrono::duration<double>(now - t0).count();
+      const double done = double(k - first_step + 1);
       spdlog::info("step {}/{} ({:.0f}%)  t = {:.5g} s  N = {}  contacts {}  KE {:.4g} J  {:.3g} particle-steps/s  ETA {}",
                    k, nsteps, 100.0 * k / nsteps, s.time, s.particles.size(), s.contact_count(), s.kinetic_energy(),
-                   particle_steps / el, hms(el / k * (nsteps - k)));
+                   particle_steps / el, hms(el / done * double(nsteps - k)));
     }
   }
   check_finite(s);
   csv.flush();
+  checkpoint();  // lets a user extend the duration and resume
   const double wall_s = std::chrono::duration<double>(clock::now() - t0).count();
   nlohmann::json j;
   j["case"] = c.name;
@@ -339,7 +398,7 @@ int check_case(const Case& c) {
   fmt::print("memory estimate: {:.1f} MiB ({:.0f} bytes per particle)\n", bytes / 1048576.0, per_particle + 8 * per_entry);
   for (const auto& m : a.messages) fmt::print("{}: {}\n", a.level == TimestepAudit::Error ? "error" : "warning", m);
   if (a.level == TimestepAudit::Error) {
-    fmt::print(stderr, "{}: key 'simulation.dt': time step past its hard bound\n", c.file);
+    fmt::print(stderr, "error: {}:{}: key 'simulation.dt': time step past its hard bound\n", c.file, c.dt_line);
     return 1;
   }
   fmt::print("ok\n");

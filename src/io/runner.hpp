@@ -11,6 +11,7 @@ namespace cohdem {
 struct RunOptions {
   std::string out_dir;   ///< overrides [output] folder when not empty
   bool quiet = false;    ///< no progress lines
+  std::string resume;    ///< checkpoint to continue from (same case; output folder reused)
 };
 
 /// Smallest particle radius of each material (particles present and pour sources).

@@ -4,6 +4,7 @@
 // compiled once per law, so everything below inlines: no virtual calls per pair.
 #pragma once
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "models/pair.hpp"
@@ -50,6 +51,34 @@ struct ContactLaw {
 
   static Params make(const ParamSet& p, const PairMaterial& m) {
     return {N::make(p, m), D::make(p, m), T::make(p, m), R::make(p, m), W::make(p, m)};
+  }
+
+  /// Named per-contact state columns (for the single-contact driver and contact output).
+  /// A sub-model exposes columns with `static constexpr std::array<const char*, K>
+  /// state_columns` and `static void state_values(const Params&, const State&, double* out)`.
+  static std::vector<std::string> state_names() {
+    std::vector<std::string> v;
+    auto add = [&](auto* tag) {
+      using X = std::remove_pointer_t<decltype(tag)>;
+      if constexpr (requires { X::state_columns; })
+        for (const char* c : X::state_columns) v.emplace_back(c);
+    };
+    add((N*)nullptr); add((D*)nullptr); add((T*)nullptr); add((R*)nullptr); add((W*)nullptr);
+    return v;
+  }
+  static void state_values(const Params& p, const State& s, double* out) {
+    auto put = [&](auto* tag, const auto& sp, const auto& ss) {
+      using X = std::remove_pointer_t<decltype(tag)>;
+      if constexpr (requires { X::state_columns; }) {
+        X::state_values(sp, ss, out);
+        out += X::state_columns.size();
+      }
+    };
+    put((N*)nullptr, p.normal, s.normal);
+    put((D*)nullptr, p.damping, s.damping);
+    put((T*)nullptr, p.tangential, s.tangential);
+    put((R*)nullptr, p.rolling, s.rolling);
+    put((W*)nullptr, p.twisting, s.twisting);
   }
 
   /// Largest tensile separation (m, >= 0) at which a live contact still acts.

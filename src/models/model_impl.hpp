@@ -41,6 +41,12 @@ class ContactModelImpl final : public ContactModel {
     std::memcpy(state, &s, sizeof(State));
     return alive;
   }
+  std::vector<std::string> state_names() const override { return Law::state_names(); }
+  void state_values(int i, int j, const void* state, double* out) const override {
+    State s;
+    std::memcpy(&s, state, sizeof(State));
+    Law::state_values(p(i, j), s, out);
+  }
   void compute(ForceContext& ctx) const override;
 
   const Params& p(int i, int j) const { return params_[size_t(i) * n_ + j]; }

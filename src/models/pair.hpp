@@ -23,8 +23,14 @@ struct PairGeom {
 /// Output of the normal sub-model, read by damping, tangential, rolling and twisting.
 struct NormalOut {
   double f_el = 0;   ///< elastic/hysteretic normal force, N (repulsive > 0, adhesive < 0)
-  double kn = 0;     ///< tangent stiffness d f_el / d delta, N/m (damping, rolling stiffness)
+  /// Normal stiffness, N/m (damping, rolling stiffness, time step): the tangent d f_el/d delta
+  /// for elastic laws; hysteretic laws give their elastic (unloading) stiffness, JKR 2 E* a.
+  double kn = 0;
   double a = 0;      ///< contact radius, m (conduction, Mindlin stiffness)
+  /// Adhesive part included in f_el, as a magnitude (N, >= 0): the pull-off force an
+  /// adhesive model adds (Walton Fc, JKR/DMT pull-off, MEPA/EEPA adhesive bound). Read by
+  /// cohesion-offset Coulomb limits and by Walton's bending/twisting limits; 0 otherwise.
+  double f_adh = 0;
   bool alive = false;///< the contact exists (history kept); false ends it and resets history
 };
 

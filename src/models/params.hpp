@@ -40,6 +40,7 @@ constexpr ParamSpec req(const char* n, const char* u, double lo, double hi, cons
 struct ParamOrigin {
   std::string file;
   int line = 0;
+  std::string section;  ///< e.g. "contact" or "contact.pair[0]"
 };
 
 class ParamSet {
@@ -52,7 +53,7 @@ class ParamSet {
   const std::map<std::string, double>& values() const { return values_; }
   ParamOrigin origin(const std::string& key) const {
     auto it = origin_.find(key);
-    return it == origin_.end() ? ParamOrigin{file_, 0} : it->second;
+    return it == origin_.end() ? ParamOrigin{file_, 0, section_} : it->second;
   }
   /// Where this set as a whole comes from (used when a required key is missing).
   void set_context(std::string file, int line, std::string section) {
@@ -72,7 +73,7 @@ class ParamSet {
     const bool low_ok = spec.min_open ? v > spec.min : v >= spec.min;
     if (!(low_ok && v <= spec.max)) {
       const auto o = origin(spec.name);
-      throw InputError(o.file, o.line, spec.name,
+      throw InputError(o.file, o.line, o.section.empty() ? std::string(spec.name) : o.section + "." + spec.name,
                        "value " + num(v) + " out of range: expected " + (spec.min_open ? "(" : "[") +
                            num(spec.min) + ", " + num(spec.max) + "] " + spec.unit + " (" + spec.doc + ")");
     }

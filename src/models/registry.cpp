@@ -1,15 +1,23 @@
 // The one place where contact-law presets are registered: one row per preset.
 #include "models/registry.hpp"
 
+#include <algorithm>
 #include <functional>
 #include <map>
 
+#include "models/damping/ratio.hpp"
 #include "models/damping/restitution.hpp"
+#include "models/normal/dmt.hpp"
 #include "models/normal/hertz.hpp"
+#include "models/normal/jkr.hpp"
 #include "models/normal/linear.hpp"
+#include "models/normal/mepa.hpp"
+#include "models/normal/walton.hpp"
 #include "models/rolling/rolling.hpp"
 #include "models/tangential/spring.hpp"
 #include "models/twisting/twisting.hpp"
+#include "models/walton/bending.hpp"
+#include "models/walton/tangential.hpp"
 #include "sim/force_kernel.hpp"
 
 namespace cohdem {
@@ -17,6 +25,15 @@ namespace cohdem {
 namespace {
 
 using Factory = std::function<std::unique_ptr<ContactModel>(const std::string& rolling)>;
+
+/// A law whose rolling slot is fixed (Walton: bending); accepts only rolling = "none".
+template <class N, class D, class T, class R, class W>
+Factory fixed_rolling(const std::string& name) {
+  return [name](const std::string& rolling) -> std::unique_ptr<ContactModel> {
+    if (rolling == "none") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, R, W>>>(name);
+    return nullptr;
+  };
+}
 
 /// Instantiates a law for each rolling choice (the rolling model is a compile-time slot).
 template <class N, class D, class T, class W = NoTwisting>
@@ -34,6 +51,15 @@ const std::map<std::string, Factory>& table() {
       // name            normal        damping                   tangential
       {"linear", with_rolling<LinearNormal, LinearRestitutionDamping, LinearTangential>("linear")},
       {"hertz_mindlin", with_rolling<HertzNormal, TsujiDamping, MindlinTangential>("hertz_mindlin")},
+      // Adhesive and elasto-plastic laws (docs/contact-models.md; each header says why
+      // its damping and tangential partners were chosen).
+      {"mepa", with_rolling<MepaNormal, ViscousDamping, HystTangential<MepaNormal>>("mepa")},
+      {"luding", with_rolling<LudingNormal, ViscousDamping, HystTangential<LudingNormal>>("luding")},
+      {"eepa", with_rolling<EepaNormal, RatioDamping, HystTangential<EepaNormal>>("eepa")},
+      {"jkr", with_rolling<JkrNormal, TsujiDamping, MindlinTangential>("jkr")},
+      {"dmt", with_rolling<DmtNormal, TsujiDamping, MindlinTangential>("dmt")},
+      // Walton: bending in the rolling slot, twisting in the twisting slot.
+      {"walton", fixed_rolling<WaltonNormal, RatioDamping, WaltonTangential, WaltonBending, WaltonTwisting>("walton")},
   };
   return t;
 }
@@ -61,9 +87,15 @@ std::unique_ptr<ContactModel> make_contact_model(const std::string& model, const
     throw InputError(file, line, "contact.model",
                      "unknown contact model '" + model + "'; expected one of: " + join(contact_model_names()));
   auto m = it->second(rolling);
-  if (!m)
+  if (!m) {
+    const auto names = rolling_model_names();
+    if (std::find(names.begin(), names.end(), rolling) != names.end())
+      throw InputError(file, line, "contact.rolling",
+                       "rolling model '" + rolling + "' cannot be used with contact model '" + model +
+                           "', whose rolling slot is part of the model (walton: bending moment); expected: none");
     throw InputError(file, line, "contact.rolling",
                      "unknown rolling model '" + rolling + "'; expected one of: " + join(rolling_model_names()));
+  }
   return m;
 }
 

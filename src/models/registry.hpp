@@ -33,6 +33,10 @@ class ContactModel {
   /// One contact, for the single-contact driver and tests; `state` points to state_size()
   /// bytes (zeroed for a new contact). Returns false when there is no contact.
   virtual bool evaluate(int i, int j, const PairGeom& g, void* state, PairForce& out) const = 0;
+  /// Names of the per-contact state columns the law exposes (e.g. MEPA: dmax, dp, branch).
+  virtual std::vector<std::string> state_names() const = 0;
+  /// Values of those columns for one contact of pair (i, j); `out` has state_names().size().
+  virtual void state_values(int i, int j, const void* state, double* out) const = 0;
   /// The bulk force loop over all pairs and wall contacts of one step.
   virtual void compute(ForceContext& ctx) const = 0;
 };

@@ -44,6 +44,7 @@ struct InsertSpec {
   uint64_t count = 0;           ///< fill to a count, or ...
   double solids_fraction = 0;   ///< ... to a solids fraction of the region volume
   Vec3 velocity;                ///< initial velocity
+  double velocity_jitter = 0;   ///< plus a random velocity, each component uniform in +/- this, m/s
   int max_attempts = 2000;      ///< per particle
 };
 

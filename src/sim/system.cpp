@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
 
 #include "core/error.hpp"
 #include "sim/force_context.hpp"
@@ -37,13 +39,26 @@ size_t System::add_particle(int species, double r, const Vec3& x, const Vec3& v,
   return particles.add(next_id++, species, r, materials.at(species).density, x, v, w);
 }
 
+Vec3 System::initial_velocity(const InsertSpec& spec) {
+  if (spec.velocity_jitter <= 0) return spec.velocity;
+  const double a = spec.velocity_jitter;
+  return spec.velocity + Vec3{rng.uniform(-a, a), rng.uniform(-a, a), rng.uniform(-a, a)};
+}
+
 size_t System::insert(const InsertSpec& spec) {
   const InsertResult res = insert_random(spec, rng, particles.x, particles.radius);
-  for (size_t k = 0; k < res.x.size(); ++k) add_particle(spec.species, res.r[k], res.x[k], spec.velocity);
+  for (size_t k = 0; k < res.x.size(); ++k) add_particle(spec.species, res.r[k], res.x[k], initial_velocity(spec));
   return res.x.size();
 }
 
-void System::prepare() {
+void System::resume_prepare() {
+  prepare_reach();
+  nl.build(particles, walls, cfg.domain, cfg.skin, reach_, false);
+  if (has_pending_) install_pending();
+  dirty_ = false;
+}
+
+void System::prepare_reach() {
   if (!model) throw RunError("no contact model set");
   if (cfg.threads > 0) omp_set_num_threads(cfg.threads);
   double rmax = 0;
@@ -53,10 +68,65 @@ void System::prepare() {
   const int n = int(materials.size());
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) reach_ = std::max(reach_, model->reach(i, j, rmax));
+}
+
+void System::prepare() {
+  prepare_reach();
   const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
   nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
+  if (has_pending_) install_pending();
   compute_forces();
   dirty_ = false;
+}
+
+System::SavedContacts System::saved_contacts() const {
+  SavedContacts c;
+  const size_t st = nl.hist.stride;
+  for (size_t i = 0; i + 1 < nl.start.size(); ++i)
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
+      if (nl.hist.live[k]) {
+        c.pair_keys.emplace_back(particles.id[i], particles.id[nl.jdx[k]]);
+        const std::byte* b = nl.hist.data.data() + k * st;
+        c.pair_data.insert(c.pair_data.end(), b, b + st);
+      }
+  for (size_t i = 0; i + 1 < nl.wstart.size(); ++i)
+    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e)
+      if (nl.whist.live[e]) {
+        c.wall_keys.emplace_back(particles.id[i], nl.wall[e]);
+        const std::byte* b = nl.whist.data.data() + e * st;
+        c.wall_data.insert(c.wall_data.end(), b, b + st);
+      }
+  return c;
+}
+
+void System::install_pending() {
+  // Match saved keys against the freshly built lists (both small: a map is fine here).
+  const size_t st = nl.hist.stride;
+  std::map<std::pair<uint64_t, uint64_t>, size_t> pk, wk;
+  for (size_t q = 0; q < pending_.pair_keys.size(); ++q) pk[pending_.pair_keys[q]] = q;
+  for (size_t q = 0; q < pending_.wall_keys.size(); ++q) wk[pending_.wall_keys[q]] = q;
+  size_t found = 0;
+  for (size_t i = 0; i + 1 < nl.start.size(); ++i)
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      auto it = pk.find({particles.id[i], particles.id[nl.jdx[k]]});
+      if (it == pk.end()) continue;
+      std::memcpy(nl.hist.at(k), pending_.pair_data.data() + it->second * st, st);
+      nl.hist.live[k] = 1;
+      ++found;
+    }
+  for (size_t i = 0; i + 1 < nl.wstart.size(); ++i)
+    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
+      auto it = wk.find({particles.id[i], nl.wall[e]});
+      if (it == wk.end()) continue;
+      std::memcpy(nl.whist.at(e), pending_.wall_data.data() + it->second * st, st);
+      nl.whist.live[e] = 1;
+      ++found;
+    }
+  if (found != pk.size() + wk.size())
+    throw RunError("checkpoint: " + std::to_string(pk.size() + wk.size() - found) +
+                   " saved contacts have no pair in the rebuilt neighbor list");
+  pending_ = {};
+  has_pending_ = false;
 }
 
 void System::move_walls(double dt) {
@@ -120,7 +190,7 @@ void System::do_pours() {
     InsertSpec batch = s.spec;
     batch.count = due - s.inserted;
     const InsertResult res = insert_random(batch, rng, particles.x, particles.radius, batch.count);
-    for (size_t k = 0; k < res.x.size(); ++k) add_particle(batch.species, res.r[k], res.x[k], batch.velocity);
+    for (size_t k = 0; k < res.x.size(); ++k) add_particle(batch.species, res.r[k], res.x[k], initial_velocity(batch));
     s.inserted += res.x.size();
     s.next_time = time + s.interval;
   }

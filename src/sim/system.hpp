@@ -65,6 +65,9 @@ class System {
   /// Builds lists and evaluates forces at the current state (call once before stepping,
   /// and after changing particles or walls by hand).
   void prepare();
+  /// After a checkpoint restart: builds the lists and installs the saved contacts without
+  /// evaluating forces (the checkpoint carries them), so the run continues bit for bit.
+  void resume_prepare();
   void step_once();
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
 
@@ -77,6 +80,16 @@ class System {
   /// Largest overlap relative to the smaller radius among live pair contacts.
   double max_relative_overlap() const;
 
+  /// Contact history to install at the next prepare() (checkpoint restart): keys (id_i, id_j)
+  /// of live pair contacts and (particle id, wall index) of live wall contacts, with
+  /// state_size() bytes each.
+  struct SavedContacts {
+    std::vector<std::pair<uint64_t, uint64_t>> pair_keys, wall_keys;
+    std::vector<std::byte> pair_data, wall_data;
+  };
+  SavedContacts saved_contacts() const;
+  void restore_contacts(SavedContacts c) { pending_ = std::move(c); has_pending_ = true; dirty_ = true; }
+
   /// Reach (m) of the contact law for neighbor search (adhesive range).
   double reach() const { return reach_; }
   double rebuild_count() const { return double(nl.stats.builds); }
@@ -86,8 +99,13 @@ class System {
   void move_walls(double dt);
   void control_walls(double dt);
   void do_pours();
+  Vec3 initial_velocity(const InsertSpec& spec);
   double reach_ = 0;
   bool dirty_ = true;
+  SavedContacts pending_;
+  bool has_pending_ = false;
+  void install_pending();
+  void prepare_reach();
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
 };
 

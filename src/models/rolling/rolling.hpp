@@ -52,7 +52,10 @@ struct EpsdRolling {
       return s.mk;
     }
     if (p.eta_r > 0) {
-      const double Ir = 1.0 / (1.0 / (g.Ii + g.mi * g.ri * g.ri) + 1.0 / (g.Ij + g.mj * g.rj * g.rj));
+      // A wall (or fixed particle) has I = inf and adds nothing; testing for it avoids
+      // m r^2 = inf * 0 = NaN for a wall (r_j = 0).
+      auto inv = [](double I, double m, double r) { return std::isinf(I) ? 0.0 : 1.0 / (I + m * r * r); };
+      const double Ir = 1.0 / (inv(g.Ii, g.mi, g.ri) + inv(g.Ij, g.mj, g.rj));
       return s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
     }
     return s.mk;

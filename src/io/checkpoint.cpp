@@ -1,0 +1,146 @@
+#include "io/checkpoint.hpp"
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cohdem {
+
+namespace {
+
+constexpr char kMagic[8] = {'C', 'O', 'H', 'D', 'E', 'M', 'C', 'K'};
+constexpr uint32_t kVersion = 1;
+
+class Out {
+ public:
+  template <class T>
+  void pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    buf_.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  template <class T>
+  void vec(const std::vector<T>& v) {
+    pod(uint64_t(v.size()));
+    if (!v.empty()) buf_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  void str(const std::string& s) {
+    pod(uint64_t(s.size()));
+    buf_ += s;
+  }
+  const std::string& bytes() const { return buf_; }
+
+ private:
+  std::string buf_;
+};
+
+class In {
+ public:
+  In(std::string data, std::string file) : d_(std::move(data)), file_(std::move(file)) {}
+  template <class T>
+  T pod() {
+    T v;
+    need(sizeof v);
+    std::memcpy(&v, d_.data() + p_, sizeof v);
+    p_ += sizeof v;
+    return v;
+  }
+  template <class T>
+  void vec(std::vector<T>& v) {
+    const uint64_t n = pod<uint64_t>();
+    need(n * sizeof(T));
+    v.resize(n);
+    if (n) std::memcpy(static_cast<void*>(v.data()), d_.data() + p_, n * sizeof(T));
+    p_ += n * sizeof(T);
+  }
+  std::string str() {
+    const uint64_t n = pod<uint64_t>();
+    need(n);
+    std::string s = d_.substr(p_, n);
+    p_ += n;
+    return s;
+  }
+  void need(size_t n) const {
+    if (p_ + n > d_.size()) throw InputError(file_, 0, "", "checkpoint file is truncated");
+  }
+
+ private:
+  std::string d_;
+  size_t p_ = 0;
+  std::string file_;
+};
+
+}  // namespace
+
+void write_checkpoint(const std::filesystem::path& path, const System& s) {
+  Out o;
+  for (char c : kMagic) o.pod(c);
+  o.pod(kVersion);
+  o.str(s.model->name());
+  o.pod(uint64_t(s.model->state_size()));
+  o.pod(s.time);
+  o.pod(s.step);
+  o.pod(s.next_id);
+  o.pod(s.nl.stats.builds);
+  o.str(s.rng.state());
+  const ParticleStore& P = s.particles;
+  o.vec(P.id); o.vec(P.species); o.vec(P.flag); o.vec(P.body);
+  o.vec(P.radius); o.vec(P.radius0); o.vec(P.mass); o.vec(P.inertia);
+  o.vec(P.x); o.vec(P.v); o.vec(P.omega); o.vec(P.force); o.vec(P.torque);
+  o.vec(P.temperature); o.vec(P.heat_flow);
+  o.pod(uint64_t(s.walls.size()));
+  for (const Wall& w : s.walls) {
+    o.pod(w.point); o.pod(w.center); o.pod(w.vn); o.pod(w.travel); o.pod(w.force); o.pod(w.torque);
+    o.pod(w.velocity); o.pod(w.omega); o.pod(w.target_force);
+  }
+  o.pod(uint64_t(s.pours.size()));
+  for (const PourSource& p : s.pours) { o.pod(p.inserted); o.pod(p.next_time); }
+  const System::SavedContacts c = s.saved_contacts();
+  o.vec(c.pair_keys); o.vec(c.pair_data); o.vec(c.wall_keys); o.vec(c.wall_data);
+  write_file_atomic(path, o.bytes());
+}
+
+void read_checkpoint(const std::filesystem::path& path, System& s) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path.string(), 0, "", "cannot open checkpoint file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  In in(ss.str(), path.string());
+  for (char c : kMagic)
+    if (in.pod<char>() != c) throw InputError(path.string(), 0, "", "not a cohdem checkpoint");
+  if (in.pod<uint32_t>() != kVersion) throw InputError(path.string(), 0, "", "unsupported checkpoint version");
+  const std::string model = in.str();
+  const uint64_t stride = in.pod<uint64_t>();
+  if (model != s.model->name() || stride != s.model->state_size())
+    throw InputError(path.string(), 0, "contact.model",
+                     "checkpoint was written with contact model '" + model + "', the case uses '" + s.model->name() + "'");
+  s.time = in.pod<double>();
+  s.step = in.pod<uint64_t>();
+  s.next_id = in.pod<uint64_t>();
+  const uint64_t builds = in.pod<uint64_t>();
+  s.rng.set_state(in.str());
+  ParticleStore& P = s.particles;
+  in.vec(P.id); in.vec(P.species); in.vec(P.flag); in.vec(P.body);
+  in.vec(P.radius); in.vec(P.radius0); in.vec(P.mass); in.vec(P.inertia);
+  in.vec(P.x); in.vec(P.v); in.vec(P.omega); in.vec(P.force); in.vec(P.torque);
+  in.vec(P.temperature); in.vec(P.heat_flow);
+  if (in.pod<uint64_t>() != s.walls.size())
+    throw InputError(path.string(), 0, "wall", "checkpoint has a different number of walls than the case");
+  for (Wall& w : s.walls) {
+    w.point = in.pod<Vec3>(); w.center = in.pod<Vec3>(); w.vn = in.pod<double>(); w.travel = in.pod<double>();
+    w.force = in.pod<Vec3>(); w.torque = in.pod<Vec3>(); w.velocity = in.pod<Vec3>(); w.omega = in.pod<Vec3>();
+    w.target_force = in.pod<double>();
+  }
+  if (in.pod<uint64_t>() != s.pours.size())
+    throw InputError(path.string(), 0, "insert", "checkpoint has a different number of pour sources than the case");
+  for (PourSource& p : s.pours) { p.inserted = in.pod<uint64_t>(); p.next_time = in.pod<double>(); }
+  System::SavedContacts c;
+  in.vec(c.pair_keys); in.vec(c.pair_data); in.vec(c.wall_keys); in.vec(c.wall_data);
+  s.restore_contacts(std::move(c));
+  s.resume_prepare();
+  s.nl.stats.builds = builds;  // the restart's own build does not count (re-sort schedule)
+}
+
+}  // namespace cohdem
