@@ -35,7 +35,13 @@ ParamSet params_for(const std::string& model, const std::string& rolling) {
   ParamSet p;
   if (model == "linear") { p.set("kn", 2e5); p.set("e", 0.9); p.set("mu", 0.5); }
   else if (model == "hertz_mindlin") { p.set("e", 0.9); p.set("mu", 0.5); }
-  else {
+  else if (model == "mepa") {  // n = 3/2, about the linear force at delta = 0.01 d
+    p.set("k1", 2e6); p.set("k2", 1e7); p.set("kadh", 1e5); p.set("n", 1.5); p.set("gamma_n", 13.0); p.set("mu", 0.5);
+  } else if (model == "walton") {  // K_R = 2 pi Y 2R* ~ 2e5 N/m
+    p.set("Y", 6.4e4); p.set("Fc0", 1.0); p.set("beta_n", 0.03); p.set("mu", 0.5);
+  } else if (model == "luding") {
+    p.set("k1", 2e5); p.set("k2", 1e6); p.set("kc", 1e4); p.set("gamma_n", 13.0); p.set("mu", 0.5);
+  } else {
     // A preset this file does not know yet (MEPA, Walton, ...): fill every required key with
     // a plausible value by name; presets that need more are skipped (see SkipWithError).
     auto m = make_contact_model(model, rolling);
@@ -187,7 +193,11 @@ void register_all() {
     if (name != "linear" && name != "hertz_mindlin") extra.push_back(name);
   for (const auto& name : extra) {
     cases.push_back({name.c_str(), "none"});
-    cases.push_back({name.c_str(), "epsd"});
+    try {  // some presets have no rolling choice (walton: its bending moment fills the slot)
+      make_contact_model(name, "epsd");
+      cases.push_back({name.c_str(), "epsd"});
+    } catch (const std::exception&) {
+    }
   }
   for (const auto& c : cases) {
     const std::string tag = std::string(c.model) + (std::string(c.rolling) == "none" ? "" : "+" + std::string(c.rolling));
