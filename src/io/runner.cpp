@@ -2,9 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <omp.h>
+
+#include <malloc.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
@@ -176,6 +181,22 @@ void check_finite(const System& s) {
                      " s): the time step is too large for the contact stiffness, or a particle was inserted overlapping");
 }
 
+/// Peak resident memory of this process (VmHWM), bytes; 0 where /proc is not there.
+double peak_rss_bytes() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return 1024.0 * std::stod(line.substr(6));  // kB
+  return 0.0;
+}
+
+/// Hands freed heap back to the system and restarts the peak-RSS count (Linux: writing 5 to
+/// clear_refs resets VmHWM to the current RSS), so the peak of the time loop can be read.
+void reset_peak_rss() {
+  malloc_trim(0);
+  std::ofstream("/proc/self/clear_refs") << "5";
+}
+
 }  // namespace
 
 int run_case(const Case& c, const RunOptions& opt) {
@@ -271,6 +292,8 @@ int run_case(const Case& c, const RunOptions& opt) {
     csv.row(S.row);
     write_frame();
   }
+  const double peak_rss_setup = peak_rss_bytes();
+  reset_peak_rss();  // the case file's parse tree is gone: measure the run itself from here
   const auto t0 = clock::now();
   auto last = t0, last_ck = t0;
   uint64_t particle_steps = 0;
@@ -315,6 +338,21 @@ int run_case(const Case& c, const RunOptions& opt) {
   j["wall_time_s"] = wall_s;
   j["particle_steps_per_s"] = wall_s > 0 ? double(particle_steps) / wall_s : 0.0;
   j["kinetic_energy"] = s.kinetic_energy();
+  {  // flow observables of the free particles (benchmarks compare them with peer codes)
+    double mfree = 0;
+    for (size_t i = 0; i < s.particles.size(); ++i)
+      if (s.particles.flag[i] == kFree) mfree += s.particles.mass[i];
+    const Vec3 p = s.momentum();
+    j["rotational_energy"] = s.rotational_energy();
+    j["translational_energy"] = s.kinetic_energy() - s.rotational_energy();
+    j["free_mass"] = mfree;
+    const double im = mfree > 0 ? 1.0 / mfree : 0.0;
+    j["mean_velocity"] = {p.x * im, p.y * im, p.z * im};
+  }
+  j["threads"] = omp_get_max_threads();
+  j["peak_rss_bytes"] = std::max(peak_rss_setup, peak_rss_bytes());  // whole process
+  j["peak_rss_run_bytes"] = peak_rss_bytes();  // from the start of the time loop
+  j["run_bytes_per_particle"] = s.particles.size() ? peak_rss_bytes() / double(s.particles.size()) : 0.0;
   j["contacts"] = s.contact_count();
   j["neighbor_builds"] = s.nl.stats.builds;
   j["lost_contacts"] = s.nl.stats.lost_contacts;

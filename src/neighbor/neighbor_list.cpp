@@ -1,5 +1,7 @@
 #include "neighbor/neighbor_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -8,63 +10,27 @@
 
 namespace cohdem {
 
-namespace {
-
-struct Key {
-  uint64_t a, b;
-  uint32_t slot;
-  bool operator<(const Key& o) const { return a != o.a ? a < o.a : b < o.b; }
-};
-
-/// Live history entries of a list, keyed for lookup after the rebuild.
-std::vector<Key> live_keys(const HistoryArray& h, const std::vector<uint64_t>& key_a,
-                           const std::vector<uint64_t>& key_b) {
-  std::vector<Key> keys;
-  for (size_t k = 0; k < h.live.size(); ++k)
-    if (h.live[k]) keys.push_back({key_a[k], key_b[k], uint32_t(k)});
-  std::sort(keys.begin(), keys.end());
-  return keys;
-}
-
-/// Copies history of matching keys from `old` into the freshly sized `nu`.
-uint64_t carry_over(const std::vector<Key>& keys, const HistoryArray& old, HistoryArray& nu,
-                    const std::vector<uint64_t>& na, const std::vector<uint64_t>& nb) {
-  if (keys.empty()) return 0;
-  uint64_t found = 0;
-  for (size_t k = 0; k < na.size(); ++k) {
-    const Key q{na[k], nb[k], 0};
-    auto it = std::lower_bound(keys.begin(), keys.end(), q);
-    if (it != keys.end() && it->a == q.a && it->b == q.b) {
-      std::memcpy(nu.at(k), old.data.data() + size_t(it->slot) * old.stride, old.stride);
-      nu.live[k] = 1;
-      ++found;
-    }
-  }
-  return keys.size() - found;
-}
-
-}  // namespace
-
 void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const Domain& dom, double skin,
                          double reach, bool resort) {
   const size_t n = p.size();
   const Vec3 L = dom.length();
 
-  // 0. Keys of live contacts, taken before particles move in memory.
-  std::vector<Key> pkeys, wkeys;
-  {
-    std::vector<uint64_t> a(jdx.size()), b(jdx.size());
-    for (size_t i = 0; i + 1 < start.size(); ++i)
-      for (uint32_t k = start[i]; k < start[i + 1]; ++k) { a[k] = p.id[i]; b[k] = p.id[jdx[k]]; }
-    pkeys = live_keys(hist, a, b);
-    std::vector<uint64_t> wa(wall.size()), wb(wall.size());
-    for (size_t i = 0; i + 1 < wstart.size(); ++i)
-      for (uint32_t k = wstart[i]; k < wstart[i + 1]; ++k) { wa[k] = p.id[i]; wb[k] = wall[k]; }
-    wkeys = live_keys(whist, wa, wb);
+  // 0. Keep the old lists (swapped into scratch: no allocation) and the ids their local
+  //    indices referred to, for the history carry-over.
+  const size_t old_n = start.empty() ? 0 : start.size() - 1;
+  if (ids_.size() != old_n) {  // lists built before ids were recorded: rows 0..old_n-1 are p's
+    ids_.assign(p.id.begin(), p.id.begin() + std::min(old_n, n));
+    ids_.resize(old_n, UINT64_MAX);
   }
-  HistoryArray old_hist = std::move(hist), old_whist = std::move(whist);
-  hist.stride = old_hist.stride;
-  whist.stride = old_whist.stride;
+  old_start_.swap(start);
+  old_jdx_.swap(jdx);
+  old_wstart_.swap(wstart);
+  old_wall_.swap(wall);
+  old_hist_.swap(hist.data);
+  old_live_.swap(hist.live);
+  old_whist_.swap(whist.data);
+  old_wlive_.swap(whist.live);
+  old_ids_.swap(ids_);
 
   // 1. Wrap periodic coordinates (only here, so stored image codes stay valid between builds).
   for (int d = 0; d < 3; ++d) {
@@ -121,8 +87,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     for (size_t i = 0; i < n; ++i) { cell_of_[i] = uint32_t(cell_index(p.x[i])); ++cell_start_[cell_of_[i] + 1]; }
     for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
     cell_list_.resize(n);
-    std::vector<uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (size_t i = 0; i < n; ++i) cell_list_[fill[cell_of_[i]]++] = uint32_t(i);
+    fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (size_t i = 0; i < n; ++i) cell_list_[fill_[cell_of_[i]]++] = uint32_t(i);
   };
   bin();
   if (resort && n > 0) {
@@ -135,15 +101,50 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       for (int sz = -1; sz <= 1; ++sz)
         shift[(sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)] = {sx * L.x, sy * L.y, sz * L.z};
 
-  // 4. Pairs: scan the 27 neighbouring cells of each particle, keep j > i (local index),
-  //    then orient each pair so its first particle has the lower id.
-  struct Raw { uint32_t i, j; uint8_t img; };
-  std::vector<Raw> raw;
-  raw.reserve(n * 8);
-  std::vector<uint32_t> count(n + 1, 0);
-  for (size_t a = 0; a < n; ++a) {
+  // 4. Pairs, straight into CSR rows: particle i scans its 27 neighbouring cells and keeps the
+  //    partners with a higher id (so each pair is found once, in the row of its lower id,
+  //    and the history frame never flips). Row order: cells in scan order, then cell order.
+  //    Parallel: each thread fills its own buffers for a contiguous block of rows; the
+  //    blocks are then concatenated in order, so the lists do not depend on the threads.
+  start.resize(n + 1);
+  start[0] = 0;
+  const uint64_t* const id = p.id.data();
+  const uint8_t* const flag = p.flag.data();
+  const Vec3* const x = p.x.data();
+  const double* const rad = p.radius.data();
+  const int nthreads = long(n) > parallel_min ? omp_get_max_threads() : 1;
+  if (int(tl_jdx_.size()) < nthreads) { tl_jdx_.resize(nthreads); tl_img_.resize(nthreads); }
+  int team = 1;
+#pragma omp parallel num_threads(nthreads)
+  {
+  const int nt = omp_get_num_threads(), tid = omp_get_thread_num();
+  const size_t a0 = n * tid / nt, a1 = n * (tid + 1) / nt;
+  std::vector<uint32_t>& jdx = tl_jdx_[tid];
+  std::vector<uint8_t>& image = tl_img_[tid];
+  jdx.clear();
+  image.clear();
+  for (size_t a = a0; a < a1; ++a) {
     const size_t ca = cell_of_[a];
     const int cx = int(ca % nc[0]), cy = int((ca / nc[0]) % nc[1]), cz = int(ca / (size_t(nc[0]) * nc[1]));
+    const uint64_t ida = id[a];
+    const bool fixed_a = flag[a] != kFree;
+    const Vec3 xa = x[a];
+    const double ra = rad[a] + skin + reach;
+    // Candidates cell_list_[q0..q1) seen under image img.
+    auto scan = [&](uint32_t q0, uint32_t q1, uint8_t img) {
+      const Vec3 sh = shift[img];
+      for (uint32_t q = q0; q < q1; ++q) {
+        const uint32_t b = cell_list_[q];
+        if (id[b] <= ida) continue;                 // found from b's side (or b == a)
+        if (fixed_a && flag[b] != kFree) continue;  // two fixed bodies
+        const Vec3 d = xa - (x[b] + sh);
+        const double rc = ra + rad[b];
+        if (norm2(d) >= rc * rc) continue;
+        jdx.push_back(b);
+        image.push_back(img);
+      }
+    };
+    const bool x_inner = cx >= 1 && cx + 1 < nc[0];
     for (int oz = -1; oz <= 1; ++oz) {
       int z = cz + oz, sz = 0;
       if (z < 0 || z >= nc[2]) {
@@ -156,85 +157,150 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
           if (!dom.periodic[1]) continue;
           sy = y < 0 ? -1 : 1; y -= sy * nc[1];
         }
+        const size_t row0 = (size_t(z) * nc[1] + y) * nc[0];
+        if (x_inner) {  // the three cells along x are contiguous in cell_list_, one image
+          scan(cell_start_[row0 + cx - 1], cell_start_[row0 + cx + 2], uint8_t(9 + (sy + 1) * 3 + (sz + 1)));
+          continue;
+        }
         for (int ox = -1; ox <= 1; ++ox) {
           int xx = cx + ox, sx = 0;
           if (xx < 0 || xx >= nc[0]) {
             if (!dom.periodic[0]) continue;
             sx = xx < 0 ? -1 : 1; xx -= sx * nc[0];
           }
-          // Duplicate visits of one cell with the same image happen when nc < 3 in a
-          // non-periodic direction only if offsets coincide; they cannot, as out-of-range
-          // offsets are skipped there. In periodic directions each offset has its own image.
-          const size_t cb = (size_t(z) * nc[1] + y) * nc[0] + xx;
-          const uint8_t img = uint8_t((sx + 1) * 9 + (sy + 1) * 3 + (sz + 1));
-          const Vec3& sh = shift[img];
-          for (uint32_t q = cell_start_[cb]; q < cell_start_[cb + 1]; ++q) {
-            const uint32_t b = cell_list_[q];
-            if (b <= a) continue;
-            if (p.flag[a] != kFree && p.flag[b] != kFree) continue;  // two fixed bodies
-            const Vec3 d = p.x[a] - (p.x[b] + sh);
-            const double rc = p.radius[a] + p.radius[b] + skin + reach;
-            if (norm2(d) >= rc * rc) continue;
-            if (p.id[a] < p.id[b]) raw.push_back({uint32_t(a), b, img});
-            else raw.push_back({b, uint32_t(a), uint8_t(26 - img)});
-            ++count[raw.back().i + 1];
-          }
+          // In a periodic direction with nc = 1 or 2 one cell is visited under distinct
+          // images (correct); out-of-range offsets in other directions are skipped.
+          // The image is that of b as seen from a (d = x_a - (x_b + shift)).
+          const size_t cb = row0 + xx;
+          scan(cell_start_[cb], cell_start_[cb + 1], uint8_t((sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)));
         }
       }
     }
+    start[a + 1] = uint32_t(jdx.size());  // end of the row within this thread's buffer
   }
-  // A nonperiodic direction with a single cell visits offsets -1 and +1 not at all, and a
-  // periodic direction with nc = 1 or 2 visits the same cell under distinct images: correct.
-  start.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) start[i + 1] = start[i] + count[i + 1];
-  jdx.resize(raw.size());
-  image.resize(raw.size());
-  {
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    for (const Raw& r : raw) { const uint32_t k = fill[r.i]++; jdx[k] = r.j; image[k] = r.img; }
+  if (tid == 0) team = nt;
   }
+  size_t np = 0;
+  for (int t = 0; t < team; ++t) {
+    const size_t a0 = n * t / team, a1 = n * (t + 1) / team;
+    for (size_t a = a0; a < a1; ++a) start[a + 1] += uint32_t(np);
+    np += tl_jdx_[t].size();
+  }
+  jdx.resize(np);
+  image.resize(np);
+#pragma omp parallel for num_threads(team) schedule(static, 1)
+  for (int t = 0; t < team; ++t) {
+    const size_t off = start[n * t / team];
+    std::copy(tl_jdx_[t].begin(), tl_jdx_[t].end(), jdx.begin() + off);
+    std::copy(tl_img_[t].begin(), tl_img_[t].end(), image.begin() + off);
+  }
+
+  // Transposed slots, dependency ranges of the force kernel, zeroed receive buffers.
   rstart.assign(n + 1, 0);
   for (uint32_t j : jdx) ++rstart[j + 1];
   for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
-  rpair.resize(jdx.size());
-  {
-    std::vector<uint32_t> fill(rstart.begin(), rstart.end() - 1);
-    for (size_t i = 0; i < n; ++i)
-      for (uint32_t k = start[i]; k < start[i + 1]; ++k) rpair[fill[jdx[k]]++] = k;
+  rslot.resize(np);
+  dep_lo.resize(n);
+  dep_hi.resize(n);
+  fill_.assign(rstart.begin(), rstart.end() - 1);
+  for (size_t i = 0; i < n; ++i) dep_lo[i] = dep_hi[i] = uint32_t(i);
+  for (size_t i = 0; i < n; ++i)
+    for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
+      const uint32_t j = jdx[k];
+      rslot[k] = fill_[j]++;
+      dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
+      dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
+    }
+  dep_lag = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t lag = dep_hi[i] - uint32_t(i);
+    if (lag <= kMaxLag) dep_lag = std::max(dep_lag, lag);
   }
+  in_f.assign(np, Vec3{});
+  in_tj.assign(np, Vec3{});
 
-  // 5. Wall candidates.
-  wstart.assign(n + 1, 0);
+  // 5. Wall candidates. Bounded walls are tested with their bounds widened by the largest
+  //    cutoff, so an approaching particle is listed before it reaches an edge.
+  wide_.assign(walls.begin(), walls.end());
+  {
+    const double m = rmax + skin + reach;
+    for (Wall& w : wide_) { w.rmin = std::max(0.0, w.rmin - m); w.rmax += m; w.zmin -= m; w.zmax += m; }
+  }
+  wstart.resize(n + 1);
+  wstart[0] = 0;
   wall.clear();
   for (size_t i = 0; i < n; ++i) {
-    if (p.flag[i] == kFree) {
-      for (size_t w = 0; w < walls.size(); ++w) {
+    if (flag[i] == kFree)
+      for (size_t w = 0; w < wide_.size(); ++w) {
         Vec3 nn;
         double delta;
-        // Bounded walls: test with the bounds widened by the cutoff so an approaching
-        // particle is listed before it reaches an edge.
-        Wall wide = walls[w];
-        const double m = p.radius[i] + skin + reach;
-        wide.rmin = std::max(0.0, wide.rmin - m); wide.rmax += m; wide.zmin -= m; wide.zmax += m;
-        if (wide.contact(p.x[i], p.radius[i], nn, delta) && delta > -(skin + reach)) wall.push_back(uint16_t(w));
+        if (wide_[w].contact(x[i], rad[i], nn, delta) && delta > -(skin + reach)) wall.push_back(uint16_t(w));
       }
-    }
     wstart[i + 1] = uint32_t(wall.size());
   }
 
-  // 6. Carry history over.
-  hist.resize(jdx.size());
-  whist.resize(wall.size());
-  {
-    std::vector<uint64_t> a(jdx.size()), b(jdx.size());
-    for (size_t i = 0; i < n; ++i)
-      for (uint32_t k = start[i]; k < start[i + 1]; ++k) { a[k] = p.id[i]; b[k] = p.id[jdx[k]]; }
-    stats.lost_contacts += carry_over(pkeys, old_hist, hist, a, b);
-    std::vector<uint64_t> wa(wall.size()), wb(wall.size());
-    for (size_t i = 0; i < n; ++i)
-      for (uint32_t k = wstart[i]; k < wstart[i + 1]; ++k) { wa[k] = p.id[i]; wb[k] = wall[k]; }
-    stats.lost_contacts += carry_over(wkeys, old_whist, whist, wa, wb);
+  // 6. Carry history over: the old row of a pair's lower-id particle holds it, if anywhere.
+  //    Old local indices are found by id (a direct table while ids are dense, as they are
+  //    when the System numbers them; a sorted table otherwise).
+  hist.data.assign(np * hist.stride, std::byte{0});
+  hist.live.assign(np, 0);
+  whist.data.assign(wall.size() * whist.stride, std::byte{0});
+  whist.live.assign(wall.size(), 0);
+  uint64_t old_live = 0;
+  for (uint8_t l : old_live_) old_live += l;
+  uint64_t old_wlive = 0;
+  for (uint8_t l : old_wlive_) old_wlive += l;
+  if (old_live + old_wlive > 0) {
+    uint64_t max_id = 0;
+    for (uint64_t v : old_ids_) if (v != UINT64_MAX) max_id = std::max(max_id, v);
+    const bool dense = max_id < 8 * uint64_t(old_n + n) + 1024;
+    std::vector<std::pair<uint64_t, uint32_t>> sorted;  // only for sparse ids
+    if (dense) {
+      if (old_of_id_.size() < max_id + 1) old_of_id_.resize(max_id + 1, UINT32_MAX);
+      for (size_t k = 0; k < old_n; ++k) if (old_ids_[k] != UINT64_MAX) old_of_id_[old_ids_[k]] = uint32_t(k);
+    } else {
+      sorted.reserve(old_n);
+      for (size_t k = 0; k < old_n; ++k) sorted.push_back({old_ids_[k], uint32_t(k)});
+      std::sort(sorted.begin(), sorted.end());
+    }
+    auto old_index = [&](uint64_t pid) -> uint32_t {
+      if (dense) return pid <= max_id ? old_of_id_[pid] : UINT32_MAX;
+      auto it = std::lower_bound(sorted.begin(), sorted.end(), std::pair<uint64_t, uint32_t>{pid, 0});
+      return it != sorted.end() && it->first == pid ? it->second : UINT32_MAX;
+    };
+    uint64_t found = 0, wfound = 0;
+    const size_t hs = hist.stride, ws = whist.stride;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t io = old_index(id[i]);
+      if (io == UINT32_MAX) continue;
+      if (old_live > 0 && start[i] < start[i + 1]) {
+        for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
+          const uint32_t jo = old_index(id[jdx[k]]);
+          if (jo == UINT32_MAX) continue;
+          for (uint32_t kk = old_start_[io]; kk < old_start_[io + 1]; ++kk)
+            if (old_jdx_[kk] == jo && old_live_[kk]) {
+              std::memcpy(hist.data.data() + k * hs, old_hist_.data() + size_t(kk) * hs, hs);
+              hist.live[k] = 1;
+              ++found;
+              break;
+            }
+        }
+      }
+      if (old_wlive > 0)
+        for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e)
+          for (uint32_t ee = old_wstart_[io]; ee < old_wstart_[io + 1]; ++ee)
+            if (old_wall_[ee] == wall[e] && old_wlive_[ee]) {
+              std::memcpy(whist.data.data() + e * ws, old_whist_.data() + size_t(ee) * ws, ws);
+              whist.live[e] = 1;
+              ++wfound;
+              break;
+            }
+    }
+    stats.lost_contacts += (old_live - std::min(old_live, found)) + (old_wlive - std::min(old_wlive, wfound));
+    if (dense)
+      for (size_t k = 0; k < old_n; ++k) if (old_ids_[k] != UINT64_MAX) old_of_id_[old_ids_[k]] = UINT32_MAX;
   }
+  ids_.assign(p.id.begin(), p.id.end());
 
   // 7. Reference state for the rebuild trigger.
   x_ref_ = p.x;
@@ -244,8 +310,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ++stats.builds;
 }
 
-bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
-                                 long parallel_min) const {
+bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
   if (x_ref_.size() != p.size()) return true;
   const long n = long(p.size());
   double dmax2 = 0, grow = 0;
@@ -254,6 +319,27 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
     if (p.flag[i] == kFrozen) continue;
     dmax2 = std::max(dmax2, norm2(p.x[i] - x_ref_[i]));
     grow = std::max(grow, p.radius[i] - r_ref_[i]);
+  }
+  const double dmax = std::sqrt(dmax2) + grow;
+  if (2 * dmax > skin) return true;
+  for (size_t w = 0; w < walls.size(); ++w)
+    if (dmax + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
+  return false;
+}
+
+bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
+                                 double dmax2_free) const {
+  if (x_ref_.size() != p.size()) return true;
+  const long n = long(p.size());
+  double dmax2 = dmax2_free, grow = 0;
+  const uint8_t* flag = p.flag.data();
+  const Vec3* x = p.x.data();
+  const double *r = p.radius.data(), *r0 = r_ref_.data();
+#pragma omp parallel for reduction(max : dmax2, grow) schedule(static) if (n > parallel_min)
+  for (long i = 0; i < n; ++i) {
+    if (flag[i] == kFrozen) continue;
+    if (flag[i] == kAttached) dmax2 = std::max(dmax2, norm2(x[i] - x_ref_[i]));
+    grow = std::max(grow, r[i] - r0[i]);
   }
   const double dmax = std::sqrt(dmax2) + grow;
   if (2 * dmax > skin) return true;

@@ -8,7 +8,8 @@
 // - Rows are CSR by i; a transposed index lets the force gather run per particle in a fixed
 //   order, so results do not depend on the number of threads.
 // - History is kept for live contacts only and carried over at each rebuild by matching
-//   (id_i, id_j) keys (sort-and-merge), so it survives rebuilds, re-sorting and (later) MPI
+//   (id_i, id_j): the old row of the lower id is scanned for the partner (ids map to old
+//   rows through a table), so it survives rebuilds, re-sorting and (later) MPI
 //   migration. Wall contacts are keyed by (particle id, wall index).
 // - Periodic images: positions are wrapped at rebuilds only; each pair stores the image
 //   code of j so distances need no minimum-image test in the force loop.
@@ -53,7 +54,18 @@ class NeighborList {
   std::vector<uint32_t> jdx;     ///< partner j
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
-  std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
+  std::vector<uint32_t> rslot;   ///< per pair k: its slot in the transposed order (j's rows)
+  /// What j receives from each pair, in the transposed order (slot rslot[k]): the force on i
+  /// (j takes its opposite) and the torque on j. Zero where the pair is not live: the force
+  /// kernel keeps it so, and build() zeroes them, so sums need no live test.
+  std::vector<Vec3> in_f, in_tj;
+  /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
+  /// kernel finishes a particle once rows dep_lo..dep_hi are done.
+  std::vector<uint32_t> dep_lo, dep_hi;
+  /// Largest dep_hi[p] - p, capped at kMaxLag: the kernel finishes particle i - dep_lag after
+  /// row i; particles further behind wait for the barrier.
+  uint32_t dep_lag = 0;
+  static constexpr uint32_t kMaxLag = 8192;
   HistoryArray hist;
 
   // Wall candidates (CSR by particle).
@@ -63,6 +75,7 @@ class NeighborList {
 
   std::array<Vec3, 27> shift{};  ///< image translations
   NeighborStats stats;
+  long parallel_min = 0;  ///< loops run on one thread below this many particles (SimConfig)
 
   /// Rebuilds the lists: wraps periodic positions, optionally re-sorts particles by cell
   /// (applied to `p`), bins, finds pairs within r_i + r_j + skin + reach, finds wall
@@ -71,7 +84,14 @@ class NeighborList {
              double reach, bool resort);
 
   /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
-  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin, long parallel_min = 0) const;
+  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
+  /// The same decision when the caller already knows the largest squared displacement of the
+  /// FREE particles since the last build (the step loop measures it while moving them):
+  /// scans only attached particles and radius growth.
+  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
+                     double dmax2_free) const;
+  /// Positions at the last build, or nullptr when the list was built for another count.
+  const Vec3* reference_positions(size_t n) const { return x_ref_.size() == n ? x_ref_.data() : nullptr; }
 
   size_t pair_count() const { return jdx.size(); }
   size_t wall_entry_count() const { return wall.size(); }
@@ -82,7 +102,16 @@ class NeighborList {
   std::vector<double> r_ref_;
   std::vector<Vec3> wall_ref_;
   // scratch reused across builds
-  std::vector<uint32_t> cell_of_, cell_start_, cell_list_;
+  std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
+  std::vector<Wall> wide_;
+  std::vector<std::vector<uint32_t>> tl_jdx_;  // per-thread pair rows during a build
+  std::vector<std::vector<uint8_t>> tl_img_;
+  // The previous lists during a build (swapped, not copied) and the ids of their rows.
+  std::vector<uint64_t> ids_, old_ids_;
+  std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, old_of_id_;
+  std::vector<uint16_t> old_wall_;
+  std::vector<std::byte> old_hist_, old_whist_;
+  std::vector<uint8_t> old_live_, old_wlive_;
 };
 
 }  // namespace cohdem

@@ -13,16 +13,18 @@ struct ForceContext {
   NeighborList& nl;
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
-  long parallel_min = 0;  ///< run on one thread below this many particles
-  // Per-pair results (force on i, torques on i and j), valid where nl.hist.live[k].
-  std::vector<Vec3>& f_pair;
-  std::vector<Vec3>& ti_pair;
-  std::vector<Vec3>& tj_pair;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
   std::vector<Vec3>& f_wall;
   std::vector<Vec3>& tw_wall;
   std::vector<Vec3>& c_wall;
+  /// Body-force acceleration added to every free particle after its contact forces, m/s^2.
+  Vec3 gravity{};
+  /// When > 0, each free particle, once its force and torque are final, gets the closing
+  /// half kick of velocity Verlet: v += F kick/m, omega += T kick/I (saves a pass over memory).
+  double kick = 0;
+  /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
+  long parallel_min = 0;
 };
 
 }  // namespace cohdem

@@ -1,118 +1,222 @@
 // The bulk force loop, compiled once per contact law (included only by registry.cpp).
 //
-// Pass 1 (parallel over i): every pair row of i; results go to per-pair buffers, no races.
-// Pass 2 (parallel over particles): each particle sums its pair results in list order, then
-//   evaluates its wall contacts. The order of every sum is fixed by the list, so results are
-//   bit-identical for any thread count.
+// Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
+//   free screening), then evaluated; the forces and torques on i are summed in list order
+//   straight into particle i, and what j receives (the force on i, whose opposite j takes,
+//   and the torque on j) goes to j's slot of the transposed buffers (nl.in_f, nl.in_tj;
+//   zero while a pair is not live).
+// Pass 2 (particle i): adds its slots in the transposed order (contiguous, no live test),
+//   then i's wall contacts, then the body force; then, in a time step, the closing half
+//   kick of i's velocity (ForceContext::kick).
+// Every sum has an order fixed by the lists, so results are bit-identical for any thread
+// count. One parallel region: each thread runs pass 1 over a contiguous block of particles
+// and pass 2 of each particle as soon as the rows it depends on are done (while the pair
+// results are still in cache); particles that depend on another block wait for the single
+// barrier. Only WHEN pass 2 runs depends on the thread count, never what it sums or in which
+// order.
 #pragma once
 #include <cmath>
 #include <limits>
+
+#include <omp.h>
 
 #include "models/model_impl.hpp"
 #include "sim/force_context.hpp"
 
 namespace cohdem {
 
+/// Row entries screened per batch in the force loop (rows are usually far shorter).
+inline constexpr uint32_t kMaxRow = 64;
+
 template <class Law>
 void ContactModelImpl<Law>::compute(ForceContext& c) const {
   ParticleStore& P = c.p;
   NeighborList& nl = c.nl;
   const long n = long(P.size());
-  auto* hs = reinterpret_cast<State*>(nl.hist.data.data());
-  auto* ws = reinterpret_cast<State*>(nl.whist.data.data());
-  uint8_t* live = nl.hist.live.data();
-  uint8_t* wlive = nl.whist.live.data();
+  State* const __restrict hs = reinterpret_cast<State*>(nl.hist.data.data());
+  State* const __restrict ws = reinterpret_cast<State*>(nl.whist.data.data());
+  uint8_t* const __restrict live = nl.hist.live.data();
+  uint8_t* const __restrict wlive = nl.whist.live.data();
+  const uint32_t* const __restrict start = nl.start.data();
+  const uint32_t* const __restrict jdx = nl.jdx.data();
+  const uint8_t* const __restrict image = nl.image.data();
+  const uint32_t* const __restrict rstart = nl.rstart.data();
+  const uint32_t* const __restrict rslot = nl.rslot.data();
+  const uint32_t* const __restrict wstart = nl.wstart.data();
+  const uint16_t* const __restrict wall_of = nl.wall.data();
+  const Vec3* const __restrict shift = nl.shift.data();
+  const Vec3* const __restrict x = P.x.data();
+  Vec3* const __restrict v = P.v.data();
+  Vec3* const __restrict omega = P.omega.data();
+  const double* const __restrict radius = P.radius.data();
+  const double* const __restrict mass = P.mass.data();
+  const double* const __restrict inertia = P.inertia.data();
+  const uint8_t* const __restrict flag = P.flag.data();
+  const int32_t* const __restrict species = P.species.data();
+  Vec3* const __restrict force = P.force.data();
+  Vec3* const __restrict torque = P.torque.data();
+  Vec3* const __restrict in_f = nl.in_f.data();
+  Vec3* const __restrict in_tj = nl.in_tj.data();
+  Vec3* const __restrict f_wall = c.f_wall.data();
+  Vec3* const __restrict tw_wall = c.tw_wall.data();
+  Vec3* const __restrict c_wall = c.c_wall.data();
+  const Wall* const walls = c.walls.data();
   constexpr double inf = std::numeric_limits<double>::infinity();
-  const double dt = c.dt;
+  const double dt = c.dt, t = c.t;
+  const Vec3 grav = c.gravity;
+  const double kick = c.kick;
 
-#pragma omp parallel for schedule(dynamic, 256) if (n > c.parallel_min)
-  for (long i = 0; i < n; ++i) {
-    const Vec3 xi = P.x[i];
-    const double ri = P.radius[i];
-    const int si = P.species[i];
-    const bool fi = P.flag[i] == kFree;
-    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
-      const uint32_t j = nl.jdx[k];
-      const Vec3 d = xi - (P.x[j] + nl.shift[nl.image[k]]);
-      const double rsum = ri + P.radius[j];
-      const double dist2 = norm2(d);
-      if (!live[k] && dist2 >= rsum * rsum) continue;
+  // Pass 1 of row i.
+  auto row = [&](const long i) __attribute__((always_inline)) {
+    const Vec3 xi = x[i];
+    const double ri = radius[i];
+    const int si = species[i];
+    const bool fi = flag[i] == kFree;
+    Vec3 F, T;
+    // Most list entries are not in contact (the skin): pick the touching or live ones first,
+    // without branches, so the loads of all entries overlap and no branch mispredicts.
+    uint32_t hit[kMaxRow];  // plain arrays: no per-row zero fill
+    double hit_d[kMaxRow][4];
+    const uint32_t k0 = start[i], k1 = start[i + 1];
+    for (uint32_t k = k0; k < k1;) {
+      const uint32_t kend = std::min(k1, k + kMaxRow);
+      uint32_t nhit = 0;
+      for (; k < kend; ++k) {
+        const uint32_t j = jdx[k];
+        const Vec3 d = xi - (x[j] + shift[image[k]]);
+        const double rsum = ri + radius[j];
+        const double d2 = norm2(d);
+        hit[nhit] = k;
+        hit_d[nhit][0] = d.x;
+        hit_d[nhit][1] = d.y;
+        hit_d[nhit][2] = d.z;
+        hit_d[nhit][3] = d2;
+        nhit += uint32_t((d2 < rsum * rsum) | (live[k] != 0));
+      }
+      for (uint32_t h = 0; h < nhit; ++h) {
+      const uint32_t k = hit[h];
+      const uint32_t j = jdx[k];
+      const Vec3 d{hit_d[h][0], hit_d[h][1], hit_d[h][2]};
+      const double rj = radius[j];
+      const double rsum = ri + rj;
+      const double dist2 = hit_d[h][3];
       const double dist = std::sqrt(dist2);
       PairGeom g;
-      g.n = d / dist;
+      g.n = d * (1.0 / dist);  // one division, not three
       g.delta = rsum - dist;
       g.ri = ri;
-      g.rj = P.radius[j];
-      g.rstar = ri * g.rj / rsum;
-      const bool fj = P.flag[j] == kFree;
-      g.mi = fi ? P.mass[i] : inf;
-      g.mj = fj ? P.mass[j] : inf;
-      g.Ii = fi ? P.inertia[i] : inf;
-      g.Ij = fj ? P.inertia[j] : inf;
+      g.rj = rj;
+      g.rstar = ri * rj / rsum;
+      const bool fj = flag[j] == kFree;
+      g.mi = fi ? mass[i] : inf;
+      g.mj = fj ? mass[j] : inf;
+      g.Ii = fi ? inertia[i] : inf;
+      g.Ij = fj ? inertia[j] : inf;
       g.mstar = 1.0 / ((fi ? 1.0 / g.mi : 0.0) + (fj ? 1.0 / g.mj : 0.0));
-      const Vec3 vij = P.v[i] - P.v[j];
+      const Vec3 vij = v[i] - v[j];
       g.vn = dot(vij, g.n);
-      const double li = ri - 0.5 * g.delta, lj = g.rj - 0.5 * g.delta;
-      const Vec3 vrel = vij - cross(P.omega[i] * li + P.omega[j] * lj, g.n);
+      const double li = ri - 0.5 * g.delta, lj = rj - 0.5 * g.delta;
+      const Vec3 vrel = vij - cross(omega[i] * li + omega[j] * lj, g.n);
       g.vt = vrel - g.n * dot(vrel, g.n);
-      g.wrel = P.omega[i] - P.omega[j];
+      g.wrel = omega[i] - omega[j];
       g.dt = dt;
       PairForce out;
-      const bool alive = Law::evaluate(p(si, P.species[j]), g, hs[k], out);
+      const bool alive = Law::evaluate(p(si, species[j]), g, hs[k], out);
       live[k] = alive;
+      const uint32_t q = rslot[k];
       if (alive) {
-        c.f_pair[k] = out.f;
-        c.ti_pair[k] = out.ti;
-        c.tj_pair[k] = out.tj;
+        F += out.f;
+        T += out.ti;
+        in_f[q] = out.f;
+        in_tj[q] = out.tj;
+      } else {
+        in_f[q] = Vec3{};
+        in_tj[q] = Vec3{};
+      }
       }
     }
-  }
-
-#pragma omp parallel for schedule(static) if (n > c.parallel_min)
-  for (long i = 0; i < n; ++i) {
-    Vec3 F, T;
-    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-      if (live[k]) { F += c.f_pair[k]; T += c.ti_pair[k]; }
-    for (uint32_t q = nl.rstart[i]; q < nl.rstart[i + 1]; ++q) {
-      const uint32_t k = nl.rpair[q];
-      if (live[k]) { F -= c.f_pair[k]; T += c.tj_pair[k]; }
+    force[i] = F;
+    torque[i] = T;
+  };
+  // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
+  auto finish = [&](const long i) __attribute__((always_inline)) {
+    Vec3 F = force[i], T = torque[i];
+    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {  // zero where not live
+      F -= in_f[q];
+      T += in_tj[q];
     }
-    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
-      const Wall& w = c.walls[nl.wall[e]];
+    for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
+      const Wall& w = walls[wall_of[e]];
       PairGeom g;
       double delta;
-      if (!w.contact(P.x[i], P.radius[i], g.n, delta) || (!wlive[e] && delta <= 0)) {
+      if (!w.contact(x[i], radius[i], g.n, delta) || (!wlive[e] && delta <= 0)) {
         if (wlive[e]) { ws[e] = State{}; wlive[e] = 0; }
         continue;
       }
       g.delta = delta;
-      g.ri = P.radius[i];
+      g.ri = radius[i];
       g.rj = 0;
       g.rstar = g.ri;
-      g.mi = g.mstar = P.mass[i];
+      g.mi = g.mstar = mass[i];
       g.mj = g.Ij = inf;
-      g.Ii = P.inertia[i];
+      g.Ii = inertia[i];
       const double li = g.ri - delta;
-      const Vec3 cp = P.x[i] - g.n * li;
-      const Vec3 vw = w.velocity_at(cp, c.t);
-      g.vn = dot(P.v[i] - vw, g.n);
-      const Vec3 vrel = P.v[i] - vw - cross(P.omega[i] * li, g.n);
+      const Vec3 cp = x[i] - g.n * li;
+      const Vec3 vw = w.velocity_at(cp, t);
+      g.vn = dot(v[i] - vw, g.n);
+      const Vec3 vrel = v[i] - vw - cross(omega[i] * li, g.n);
       g.vt = vrel - g.n * dot(vrel, g.n);
-      g.wrel = P.omega[i] - w.omega;
+      g.wrel = omega[i] - w.omega;
       g.dt = dt;
       PairForce out;
-      const bool alive = Law::evaluate(p(P.species[i], w.material), g, ws[e], out);
+      const bool alive = Law::evaluate(p(species[i], w.material), g, ws[e], out);
       wlive[e] = alive;
       if (alive) {
         F += out.f;
         T += out.ti;
-        c.f_wall[e] = out.f;
-        c.tw_wall[e] = out.tj;
-        c.c_wall[e] = cp;
+        f_wall[e] = out.f;
+        tw_wall[e] = out.tj;
+        c_wall[e] = cp;
       }
     }
-    P.force[i] = F;
-    P.torque[i] = T;
+    if (flag[i] == kFree) F += grav * mass[i];
+    force[i] = F;
+    torque[i] = T;
+    // No row reads i's velocity after this point (all rows holding i are done).
+    if (kick > 0 && flag[i] == kFree) {
+      v[i] += F * (kick / mass[i]);
+      omega[i] += T * (kick / inertia[i]);
+    }
+  };
+
+  // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2
+  // of particle p follows as soon as every row it depends on is done (dep_hi[p] <= current
+  // row) while those rows lie in the block, so pair results are read back while they are
+  // still in cache. Particles that depend on rows of other blocks wait for the barrier.
+  // Only the time at which pass 2 runs depends on the thread count, never the order of sums.
+  const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
+  const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
+#pragma omp parallel if (n > c.parallel_min)
+  {
+    const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
+    const long a = n * tid / nt, b = n * (tid + 1) / nt;
+    // Particle p is finished right after row p + lag: every row it depends on is done then
+    // (dep_hi[p] - p <= lag). Particles depending on rows of other blocks, or further behind
+    // than the lag, are finished after the barrier.
+    const long lag = long(nl.dep_lag);
+    auto in_block = [&](const long q) {
+      return long(dep_lo[q]) >= a && long(dep_hi[q]) < b && long(dep_hi[q]) - q <= lag;
+    };
+    for (long i = a; i < b; ++i) {
+      row(i);
+      const long q = i - lag;
+      if (q >= a && in_block(q)) finish(q);
+    }
+    for (long q = std::max(a, b - lag); q < b; ++q)
+      if (in_block(q)) finish(q);
+#pragma omp barrier
+    for (long q = a; q < b; ++q)
+      if (!in_block(q)) finish(q);
   }
 }
 

@@ -196,14 +196,15 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces() {
-  const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
-  if (f_pair_.size() < np) { f_pair_.resize(np); ti_pair_.resize(np); tj_pair_.resize(np); }
+void System::compute_forces(double kick) {
+  const size_t nw = nl.wall_entry_count();
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, cfg.parallel_min, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
+  // Gravity is added by the kernel, after the contact forces of each free particle.
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_wall_, tw_wall_, c_wall_, cfg.gravity, kick, cfg.parallel_min};
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
+  if (walls.empty()) return;
   for (Wall& W : walls) { W.force = {}; W.torque = {}; }
   const size_t n = particles.size();
   for (size_t i = 0; i < n; ++i) {
@@ -219,11 +220,6 @@ void System::compute_forces() {
       W.torque += cross(particles.x[i] - W.center, particles.force[i]) + particles.torque[i];
     }
   }
-  // Body force.
-  const Vec3 g = cfg.gravity;
-#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
-  for (long i = 0; i < long(n); ++i)
-    if (particles.flag[i] == kFree) particles.force[i] += g * particles.mass[i];
 }
 
 void System::step_once() {
@@ -231,12 +227,17 @@ void System::step_once() {
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
-#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
+  // Half kick and drift; the same pass measures how far free particles moved since the last
+  // neighbor build (the rebuild test below then skips them).
+  const Vec3* xr = nl.reference_positions(P.size());
+  double dmax2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax2) if (n > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
     if (P.flag[i] != kFree) continue;
     P.v[i] += P.force[i] * (h / P.mass[i]);
     P.omega[i] += P.torque[i] * (h / P.inertia[i]);
     P.x[i] += P.v[i] * dt;
+    if (xr) dmax2 = std::max(dmax2, norm2(P.x[i] - xr[i]));
   }
   move_walls(dt);
   time += dt;
@@ -246,19 +247,13 @@ void System::step_once() {
     do_pours();
     if (P.size() != before) dirty_ = true;
   }
-  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin, cfg.parallel_min)) {
+  nl.parallel_min = cfg.parallel_min;
+  if (dirty_ || !xr || nl.needs_rebuild(P, walls, cfg.skin, dmax2)) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
-  compute_forces();
-  const long n2 = long(P.size());
-#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
-  for (long i = 0; i < n2; ++i) {
-    if (P.flag[i] != kFree) continue;
-    P.v[i] += P.force[i] * (h / P.mass[i]);
-    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
-  }
+  compute_forces(h);  // forces, then the closing half kick of every free particle
   control_walls(dt);
 }
 

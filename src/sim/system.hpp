@@ -98,7 +98,7 @@ class System {
   double rebuild_count() const { return double(nl.stats.builds); }
 
  private:
-  void compute_forces();
+  void compute_forces(double kick = 0);  ///< kick > 0: closing half kick of free particles too
   void move_walls(double dt);
   void control_walls(double dt);
   void do_pours();
@@ -109,7 +109,7 @@ class System {
   bool has_pending_ = false;
   void install_pending();
   void prepare_reach();
-  std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
+  std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
 };
 
 }  // namespace cohdem

@@ -1,0 +1,194 @@
+#!/usr/bin/env python3
+"""Side-by-side benchmark of cohdem against LAMMPS and LIGGGHTS (Debian's `lmp` and
+`liggghts`; bench/install-peers.sh installs them), in one invocation, runs interleaved.
+
+  python3 bench/peer_compare.py                      # all problems, 5 runs each, 1 thread
+  python3 bench/peer_compare.py --runs 7 --steps 2000 --problems chute,chute_hmr
+  python3 bench/peer_compare.py --threads 2 --mpi 2  # cohdem on 2 threads, peers on 2 ranks
+
+Problems (same initial state, same physics, same number of steps in every code):
+  chute      LAMMPS's chute benchmark, 32,000 spheres, gran/hooke/history (in.chute);
+             cohdem: bench/chute.toml; LIGGGHTS: hooke/stiffness + tangential history
+  chute_hmr  the same chute with Hertz-Mindlin + rolling resistance (in.chute.granular
+             -var model hmr: hertz/material, mindlin, tsuji, rolling sds); cohdem:
+             bench/chute_hmr.toml (EPSD rolling); LIGGGHTS: hertz + rolling_friction epsd2
+  packing    a poured packing of 100,000 spheres (bench/gen_packing.py; bench/packing.toml,
+             bench/peers/in.packing[.liggghts])
+
+For every code and problem: particle-steps per second (atoms x steps / loop time; cohdem:
+its summary.json, which times the step loop only, as LAMMPS's "Loop time" does), median and
+best of the runs, the ratio cohdem/peer, and the physics after the same simulated time:
+translational kinetic energy and mean flow velocity of the free particles (x for the chute,
+z for the packing). Results also go to OUT/results.json. Python 3 standard library only.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(HERE)
+
+
+def sh(cmd, cwd, log):
+    """Runs cmd (list), output to log; returns the output text. Raises on failure."""
+    with open(log, "w") as f:
+        r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT)
+    text = open(log).read()
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}); see {log}:\n{text[-2000:]}")
+    return text
+
+
+def parse_peer(text, nsteps):
+    """LAMMPS/LIGGGHTS screen output -> (particle-steps/s, KE, KE_rot, v_mean)."""
+    m = re.search(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
+    if not m:
+        raise RuntimeError("no 'Loop time' line in the output")
+    t, steps, atoms = float(m.group(1)), int(m.group(3)), int(m.group(4))
+    row = None
+    for line in text.splitlines():
+        f = line.split()
+        if len(f) == 5 and f[0] == str(nsteps) and f[1] == str(atoms):
+            row = f
+    if row is None:
+        raise RuntimeError(f"no thermo row for step {nsteps}")
+    return atoms * steps / t, float(row[2]), float(row[3]), float(row[4])
+
+
+class Problem:
+    def __init__(self, name, cohdem_case, vel_axis, lammps, liggghts, physics_tol, note=""):
+        self.name, self.cohdem_case, self.vel_axis = name, cohdem_case, vel_axis
+        self.lammps, self.liggghts, self.physics_tol, self.note = lammps, liggghts, physics_tol, note
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", type=int, default=5, help="runs per code and problem (interleaved)")
+    ap.add_argument("--steps", type=int, default=1000, help="steps of the chute problems")
+    ap.add_argument("--packing-steps", type=int, default=500)
+    ap.add_argument("--packing-n", type=int, default=100000)
+    ap.add_argument("--problems", default="chute,chute_hmr,packing")
+    ap.add_argument("--peers", default="lammps,liggghts")
+    ap.add_argument("--threads", type=int, default=1, help="cohdem OpenMP threads")
+    ap.add_argument("--mpi", type=int, default=1, help="MPI ranks of the peers (mpirun -np)")
+    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
+    ap.add_argument("--chute-data", default=None,
+                    help="LAMMPS chute data file (default: shared/peers/lammps-chute/data.chute beside the repo)")
+    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "peers"))
+    a = ap.parse_args()
+
+    if a.chute_data is None:  # ../shared beside the repository (or beside a worktree's parent)
+        for up in ("..", os.path.join("..", "..")):
+            cand = os.path.normpath(os.path.join(REPO, up, "shared", "peers", "lammps-chute", "data.chute"))
+            if os.path.exists(cand):
+                a.chute_data = cand
+                break
+        else:
+            a.chute_data = os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute")
+    problems = [p for p in a.problems.split(",") if p]
+    peers = [p for p in a.peers.split(",") if p]
+    for p in peers:
+        exe = {"lammps": "lmp", "liggghts": "liggghts"}.get(p)
+        if exe is None:
+            sys.exit(f"unknown peer '{p}' (lammps, liggghts)")
+        if not shutil.which(exe):
+            sys.exit(f"{exe} not found: run bench/install-peers.sh (or --peers to leave it out)")
+    if not os.path.exists(a.cohdem):
+        sys.exit(f"{a.cohdem} not found: build cohdem first (ninja -C build)")
+    os.makedirs(a.out, exist_ok=True)
+    work = os.path.abspath(a.out)
+
+    # Inputs in one working folder: peer inputs, the data files, the cohdem cases.
+    for f in os.listdir(os.path.join(HERE, "peers")):
+        shutil.copy(os.path.join(HERE, "peers", f), work)
+    if any(p.startswith("chute") for p in problems):
+        if not os.path.exists(a.chute_data):
+            sys.exit(f"{a.chute_data} not found (--chute-data)")
+        shutil.copy(a.chute_data, os.path.join(work, "data.chute"))
+        for case in ("chute", "chute_hmr"):
+            subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "data.chute"),
+                            os.path.join(HERE, case + ".toml"), "-o", os.path.join(work, case + ".toml")], check=True)
+    if "packing" in problems:
+        subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(a.packing_n),
+                        os.path.join(work, "packing.data")], check=True, stdout=subprocess.DEVNULL)
+        subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "packing.data"),
+                        os.path.join(HERE, "packing.toml"), "-o", os.path.join(work, "packing.toml"), "--frozen", "",
+                        "--box", "xy"], check=True)
+
+    mpi = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(a.mpi)] if a.mpi > 1 else []
+    probs = {
+        "chute": Problem("chute", "chute.toml", 0,
+                         ["lmp", "-in", "in.chute", "-log", "none"],
+                         ["liggghts", "-var", "model", "hooke", "-in", "in.chute.liggghts"], 0.02),
+        "chute_hmr": Problem("chute_hmr", "chute_hmr.toml", 0,
+                             ["lmp", "-var", "model", "hmr", "-in", "in.chute.granular", "-log", "none"],
+                             ["liggghts", "-var", "model", "hmr", "-in", "in.chute.liggghts"], 0.05,
+                             "rolling laws differ (cohdem EPSD, LAMMPS SDS, LIGGGHTS epsd2): physics roughly only"),
+        "packing": Problem("packing", "packing.toml", 2,
+                           ["lmp", "-in", "in.packing", "-log", "none"],
+                           ["liggghts", "-in", "in.packing.liggghts"], 0.02),
+    }
+    results = {}
+    for pname in problems:
+        P = probs[pname]
+        nsteps = a.packing_steps if pname == "packing" else a.steps
+        codes = ["cohdem"] + peers
+        res = {c: {"rate": [], "ke": None, "ke_rot": None, "v": None} for c in codes}
+        print(f"\n== {pname}: {nsteps} steps, {a.runs} interleaved runs per code "
+              f"(cohdem {a.threads} thread(s), peers {a.mpi} rank(s))", flush=True)
+        for run in range(a.runs):
+            for c in codes:
+                log = os.path.join(work, f"{pname}.{c}.{run}.log")
+                if c == "cohdem":
+                    out = os.path.join(work, f"{pname}.cohdem.out")
+                    sh([a.cohdem, "run", P.cohdem_case, "--set", f"simulation.duration={nsteps * 1e-4!r}",
+                        "--threads", str(a.threads), "--out", out, "--quiet"], work, log)
+                    j = json.load(open(os.path.join(out, "summary.json")))
+                    if j["steps"] != nsteps:
+                        raise RuntimeError(f"cohdem ran {j['steps']} steps, not {nsteps}")
+                    r = (j["particle_steps_per_s"], j["translational_energy"], j["rotational_energy"],
+                         j["mean_velocity"][P.vel_axis])
+                else:
+                    cmd = mpi + (P.lammps if c == "lammps" else P.liggghts) + ["-var", "nsteps", str(nsteps)]
+                    r = parse_peer(sh(cmd, work, log), nsteps)
+                res[c]["rate"].append(r[0])
+                res[c]["ke"], res[c]["ke_rot"], res[c]["v"] = r[1], r[2], r[3]
+                print(f"  run {run + 1} {c:8s} {r[0]:10.4g} particle-steps/s", flush=True)
+        ax = "xyz"[P.vel_axis]
+        print(f"\n  {'code':9s} {'median':>10s} {'best':>10s}  {'cohdem/peer (median, best)':>27s}  "
+              f"{'KE_trans':>12s} {'KE_rot':>10s} {'v_' + ax:>10s}  physics")
+        c0 = res["cohdem"]
+        for c in codes:
+            R = res[c]
+            med, best = statistics.median(R["rate"]), max(R["rate"])
+            R["median"], R["best"] = med, best
+            ratio = ""
+            phys = ""
+            if c != "cohdem":
+                R["ratio_median"] = statistics.median(c0["rate"]) / med
+                R["ratio_best"] = max(c0["rate"]) / best
+                ratio = f"{R['ratio_median']:.2f}x, {R['ratio_best']:.2f}x"
+                dke = abs(c0["ke"] - R["ke"]) / abs(R["ke"])
+                dv = abs(c0["v"] - R["v"]) / max(abs(R["v"]), 1e-12)
+                R["rel_diff_ke"], R["rel_diff_v"] = dke, dv
+                ok = dke <= P.physics_tol and dv <= P.physics_tol
+                R["physics_ok"] = ok
+                phys = f"dKE {dke:.2e}, dv {dv:.2e}: {'ok' if ok else 'DIFFERS'} (tol {P.physics_tol:g})"
+            print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>27s}  {R['ke']:12.7g} {R['ke_rot']:10.5g} "
+                  f"{R['v']:10.6g}  {phys}")
+        if P.note:
+            print(f"  note: {P.note}")
+        results[pname] = {"steps": nsteps, "runs": a.runs, "threads": a.threads, "mpi": a.mpi, "codes": res}
+    with open(os.path.join(work, "results.json"), "w") as f:
+        json.dump({"when": time.strftime("%Y-%m-%d %H:%M:%S"), "args": vars(a), "results": results}, f, indent=1)
+    print(f"\nlogs and results.json in {work}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""Scaling and memory table of cohdem: particle-steps per second and bytes per particle
+(peak resident memory of the time loop over the particle count) for 10^3 .. 10^6
+particles on 1 and 2 threads.
+
+  python3 bench/scaling.py                       # N = 1e3,1e4,1e5,1e6; threads 1,2; best of 3
+  python3 bench/scaling.py --sizes 1000,10000 --threads 1 --repeat 5 --steps 300
+
+The problem: bench/gen_packing.py's dense granular gas (spacing 1.01 d, random velocities,
+floor, periodic x and y; contact law of the LAMMPS chute, bench/packing.toml), the same
+number of steps at every size, so the physics per particle is the same and any change in
+cost per particle-step comes from the code (cache, lists, threads). Runs are interleaved
+over sizes and thread counts; the table shows the best run. Python 3 stdlib only.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(HERE)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", default="1000,10000,100000,1000000")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
+    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "scaling"))
+    a = ap.parse_args()
+    sizes = [int(float(x)) for x in a.sizes.split(",")]
+    threads = [int(x) for x in a.threads.split(",")]
+    os.makedirs(a.out, exist_ok=True)
+    for n in sizes:
+        data, case = os.path.join(a.out, f"p{n}.data"), os.path.join(a.out, f"p{n}.toml")
+        if not os.path.exists(case):
+            subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(n), data, "--spacing", "1.01"],
+                           check=True, stdout=subprocess.DEVNULL)
+            subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), data,
+                            os.path.join(HERE, "packing.toml"), "-o", case, "--frozen", "", "--box", "xy"], check=True)
+    best = {}
+    for r in range(a.repeat):
+        for n in sizes:
+            for t in threads:
+                out = os.path.join(a.out, f"run_{n}_{t}")
+                subprocess.run([a.cohdem, "run", os.path.join(a.out, f"p{n}.toml"), "--set",
+                                f"simulation.duration={a.steps * 1e-4!r}", "--threads", str(t), "--out", out, "--quiet"],
+                               check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                j = json.load(open(os.path.join(out, "summary.json")))
+                rate = j["particle_steps_per_s"]
+                print(f"  run {r + 1}: N = {n:8d}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
+                k = (n, t)
+                if k not in best or rate > best[k]["particle_steps_per_s"]:
+                    best[k] = j
+    print(f"\n{a.steps} steps, best of {a.repeat} runs")
+    print(f"| particles | threads | particle-steps/s | ns per particle-step | 2 threads / 1 thread | "
+          f"contacts per particle | peak RSS of the run | bytes per particle |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    rows = []
+    for n in sizes:
+        for t in threads:
+            j = best[(n, t)]
+            rate = j["particle_steps_per_s"]
+            sp = ""
+            if t != threads[0] and (n, threads[0]) in best:
+                sp = f"{rate / best[(n, threads[0])]['particle_steps_per_s']:.2f}"
+            print(f"| {n:,} | {t} | {rate:.3g} | {1e9 / rate:.0f} | {sp} | {j['contacts'] / n:.2f} | "
+                  f"{j['peak_rss_run_bytes'] / 2**20:.0f} MiB | {j['run_bytes_per_particle']:.0f} |")
+            rows.append({"particles": n, "threads": t, "particle_steps_per_s": rate, "contacts": j["contacts"],
+                         "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"]})
+    with open(os.path.join(a.out, "scaling.json"), "w") as f:
+        json.dump({"steps": a.steps, "repeat": a.repeat, "rows": rows}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
