@@ -220,6 +220,37 @@ TEST(WaltonModes, TwistingMomentAngleLoop) {
               We, Wl / We - 1);
 }
 
+// bf = 0 (a point contact) switches bending and twisting off: along a path that bends,
+// twists and slides, both moments stay exactly zero while the normal and tangential forces
+// are those of the default bf = 1 (the moments do not feed back on them).
+TEST(WaltonModes, ZeroWidenFactorRemovesMoments) {
+  W on, off;
+  on.K2 = off.K2 = 5 * on.KR();
+  off.bf = 0;
+  const auto m_on = on.model(), m_off = off.model();
+  const Cols k(*m_on);
+  const double amax = 1e-10;
+  PathBuilder pb;
+  pb.at(0.0).to(amax, 100).to(0.9 * amax, 10);
+  pb.go(PathBuilder::Theta, 1e-2, 200).go(PathBuilder::Phi, 1e-2, 200).go(PathBuilder::Xi, 1e-10, 100);
+  pb.go(PathBuilder::Theta, -1e-2, 200).go(PathBuilder::Phi, -1e-2, 200).to(-2 * on.gap_c, 100);
+  const Rows a = drive_contact(*m_on, 0, 0, spheres(), pb.table());
+  const Rows b = drive_contact(*m_off, 0, 0, spheres(), pb.table());
+  ASSERT_EQ(a.size(), b.size());
+  double mb_on = 0, mt_on = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(b[i][k.mb], 0.0) << "row " << i;
+    ASSERT_EQ(b[i][k.mt], 0.0) << "row " << i;
+    ASSERT_EQ(b[i][k.fn], a[i][k.fn]) << "row " << i;
+    ASSERT_EQ(b[i][k.ft], a[i][k.ft]) << "row " << i;
+    ASSERT_EQ(b[i][k.contact], a[i][k.contact]) << "row " << i;
+    mb_on = std::max(mb_on, std::abs(a[i][k.mb]));
+    mt_on = std::max(mt_on, std::abs(a[i][k.mt]));
+  }
+  EXPECT_GT(mb_on, 0.0);  // the path does bend and twist the bf = 1 contact
+  EXPECT_GT(mt_on, 0.0);
+}
+
 TEST(WaltonModes, TangentialStiffnessAndFrictionLimit) {
   W w;
   w.K2 = 5 * w.KR();

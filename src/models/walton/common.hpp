@@ -10,6 +10,9 @@
 // Bending spot (paper): the radius where the plastic repulsion equals the pull-off force,
 // widened by bf:  a'_b^2 = bf^2 (2 R*) Fc / K'_R = bf^2 Fc / (2 pi sf Y)   (R* cancels),
 //   B_max = Fc a'_b / 2 = bf sqrt(Fc^3 / (8 pi sf Y))    (paper, sf = 1).
+// The paper has 0 < bf < 5; bf = 0 is accepted as the switch to a point contact: a'_b = 0,
+// so K_theta = B_max = T_max = 0 and both moments vanish (the classical cohesive-frictional
+// contact without rotational resistance that Walton compares against).
 // Fc is the contact's current pull-off force, Fc0 + cf F_Rmax: the spot grows with the
 // largest load, as the flattening that causes the growth of Fc.
 // Bending stiffness (OPEN: the extraction loses it): a uniform bed of normal springs of total
@@ -25,7 +28,8 @@ namespace cohdem {
 
 inline constexpr ParamSpec kWaltonY = req("Y", "Pa", 0, kInf, "yield strength, K_R = 2 pi Y (2 R*)", true);
 inline constexpr ParamSpec kWaltonSf = opt("sf", "-", 1.0, 0, kInf, "soften factor: K'_R = sf K_R", true);
-inline constexpr ParamSpec kWaltonBf = opt("bf", "-", 1.0, 0, 5, "widen factor of the bending spot a'_b (0 < bf <= 5)", true);
+inline constexpr ParamSpec kWaltonBf =
+    opt("bf", "-", 1.0, 0, 5, "widen factor of the bending spot a'_b (0 <= bf <= 5; 0: no bending or twisting resistance)");
 inline constexpr ParamSpec kWaltonCtheta =
     opt("c_theta", "-", 0.25, 0, kInf, "bending stiffness K_theta = c_theta K'_R a'_b^2 (1/4: spring bed)", true);
 
