@@ -22,6 +22,9 @@ struct ForceContext {
   std::vector<Vec3>& f_wall;
   std::vector<Vec3>& tw_wall;
   std::vector<Vec3>& c_wall;
+  // Contact radius of each live pair / wall entry (conduction), when not null.
+  double* a_pair = nullptr;
+  double* a_wall = nullptr;
 };
 
 }  // namespace cohdem

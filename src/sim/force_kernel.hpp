@@ -64,6 +64,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         c.f_pair[k] = out.f;
         c.ti_pair[k] = out.ti;
         c.tj_pair[k] = out.tj;
+        if (c.a_pair) c.a_pair[k] = out.a;
       }
     }
   }
@@ -109,6 +110,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         c.f_wall[e] = out.f;
         c.tw_wall[e] = out.tj;
         c.c_wall[e] = cp;
+        if (c.a_wall) c.a_wall[e] = out.a;
       }
     }
     P.force[i] = F;

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "sim/force_context.hpp"
+#include "thermal/thermal.hpp"
 
 namespace cohdem {
 
@@ -34,7 +35,7 @@ void System::set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamS
 
 size_t System::add_particle(int species, double r, const Vec3& x, const Vec3& v, const Vec3& w) {
   dirty_ = true;
-  return particles.add(next_id++, species, r, materials.at(species).density, x, v, w);
+  return particles.add(next_id++, species, r, materials.at(species).density, x, v, w, cfg.initial_temperature);
 }
 
 Vec3 System::initial_velocity(const InsertSpec& spec) {
@@ -62,6 +63,7 @@ void System::prepare() {
   const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
   nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
   compute_forces();
+  if (thermal) thermal->update(*this, false);
   dirty_ = false;
 }
 
@@ -136,7 +138,11 @@ void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   if (f_pair_.size() < np) { f_pair_.resize(np); ti_pair_.resize(np); tj_pair_.resize(np); }
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
+  if (a_pair_.size() < np) a_pair_.resize(np);
+  if (a_wall_.size() < nw) a_wall_.resize(nw);
   ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_};
+  ctx.a_pair = a_pair_.data();
+  ctx.a_wall = a_wall_.data();
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
@@ -188,6 +194,7 @@ void System::step_once() {
     dirty_ = false;
   }
   compute_forces();
+  if (thermal) thermal->update(*this, true);  // heat flow, temperatures, radii
   const long n2 = long(P.size());
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n2; ++i) {

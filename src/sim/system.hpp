@@ -22,6 +22,12 @@ struct Material {
   double density = 0;  ///< kg/m^3
   double E = 0;        ///< Young's modulus, Pa (0: not given; Hertz-type models need it)
   double nu = 0;       ///< Poisson ratio
+  // Thermal properties (thermal/thermal.hpp; used only when the case has [thermal]).
+  double conductivity = 0;    ///< thermal conductivity k_s, W/(m K) (0: does not conduct)
+  double heat_capacity = 0;   ///< specific heat c, J/(kg K)
+  double expansion = 0;       ///< linear thermal expansion coefficient alpha, 1/K
+  double T_ref = 0;           ///< temperature at which radii are as given, K (0: initial temperature)
+  double E_conduction = 0;    ///< Young's modulus for the Hertz spot radius in conduction, Pa (0: E)
 };
 
 struct SimConfig {
@@ -31,7 +37,10 @@ struct SimConfig {
   Domain domain;
   int sort_every = 20;      ///< re-sort particles by cell every N neighbor builds (0: never)
   int threads = 0;          ///< OpenMP threads (0: OpenMP default)
+  double initial_temperature = 293.15;  ///< K, given to every new particle
 };
+
+class ThermalModel;  // thermal/thermal.hpp
 
 /// Pouring: inserts `spec.count` particles over time at `rate` particles per second.
 struct PourSource {
@@ -54,6 +63,8 @@ class System {
   double time = 0;
   uint64_t step = 0;
   uint64_t next_id = 0;
+  /// Heat conduction and thermal expansion, run after every force pass (null: none).
+  std::shared_ptr<ThermalModel> thermal;
 
   /// Sets the contact model and its per-pair parameters (pair_params[i*n+j], n = materials).
   void set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamSet>& pair_params);
@@ -61,6 +72,10 @@ class System {
   size_t add_particle(int species, double r, const Vec3& x, const Vec3& v = {}, const Vec3& w = {});
   /// Inserts particles at random (count or solids fraction); returns how many.
   size_t insert(const InsertSpec& spec);
+
+  /// Deletes the particles with remove[i] != 0 (trimming a bed), keeping the contact history
+  /// of the others; lists and forces are rebuilt before the next step (sim/remove_particles.cpp).
+  void remove_particles(const std::vector<uint8_t>& remove);
 
   /// Builds lists and evaluates forces at the current state (call once before stepping,
   /// and after changing particles or walls by hand).
@@ -81,6 +96,14 @@ class System {
   double reach() const { return reach_; }
   double rebuild_count() const { return double(nl.stats.builds); }
 
+  // Per-contact results of the last force pass, indexed like nl.jdx (pairs) and nl.wall (wall
+  // entries); valid where nl.hist.live / nl.whist.live. Forces act on the particle (pair: on i).
+  const std::vector<Vec3>& pair_forces() const { return f_pair_; }
+  const std::vector<double>& pair_contact_radii() const { return a_pair_; }
+  const std::vector<Vec3>& wall_forces() const { return f_wall_; }
+  const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
+  const std::vector<double>& wall_contact_radii() const { return a_wall_; }
+
  private:
   void compute_forces();
   void move_walls(double dt);
@@ -90,6 +113,7 @@ class System {
   double reach_ = 0;
   bool dirty_ = true;
   std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
+  std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 
 }  // namespace cohdem
