@@ -9,6 +9,7 @@
 #include "models/params.hpp"
 #include "particles/insertion.hpp"
 #include "sim/system.hpp"
+#include "thermal/thermal.hpp"
 
 namespace cohdem {
 
@@ -19,6 +20,7 @@ struct OutputSettings {
   std::vector<std::string> probes;  ///< extra CSV columns (see docs/case-file.md)
   double progress_interval = 5; ///< wall-clock s between progress lines
   bool vtk = true;
+  bool contacts = false;        ///< also write the contact network (contacts_*.vtu)
 };
 
 struct InsertStep {
@@ -35,6 +37,7 @@ struct ExplicitParticle {
   Vec3 x, v, omega;
   bool frozen = false;
   int attach_wall = -1;
+  double temperature = 0;       ///< K (0: thermal.initial_temperature)
 };
 
 struct Case {
@@ -52,6 +55,7 @@ struct Case {
   std::vector<InsertStep> inserts;
   std::vector<ExplicitParticle> particles;
   OutputSettings output;
+  ThermalSettings thermal;      ///< [thermal], wall temperatures, [[heat_source]]
 
   uint64_t steps() const;
 };
