@@ -553,6 +553,10 @@ Case parse(toml::table& root, const std::string& file) {
         m.control = control == "servo" ? WallControl::Servo : WallControl::Spring;
       }
     }
+    if (control != "prescribed") {
+      const double t0 = s.num("control_start", 0.0, 0, kInf, false, "s");
+      for (Wall& m : made) m.control_start = t0;
+    }
     if (control == "servo") {
       const double F = s.num("target_force", std::nullopt, 0, kInf, false, "N");
       const double g = s.num("servo_gain", std::nullopt, 0, kInf, true, "m/(N s)");

@@ -101,6 +101,7 @@ void System::move_walls(double dt) {
 
 void System::control_walls(double dt) {
   for (Wall& W : walls) {
+    if (time < W.control_start) continue;  // held (e.g. a lid released once the bed has settled)
     switch (W.control) {
       case WallControl::Prescribed: break;
       case WallControl::Servo: {
