@@ -196,6 +196,13 @@ void check_finite(const System& s) {
 
 }  // namespace
 
+void write_state_vtk(const System& s, const std::string& dir, const std::string& tag, bool contacts) {
+  const fs::path d(dir);
+  write_vtu(d / ("particles_" + tag + ".vtu"), particles_frame(s));
+  if (!s.walls.empty()) write_vtu(d / ("walls_" + tag + ".vtu"), walls_vtu(s));
+  if (contacts) write_vtu(d / ("contacts_" + tag + ".vtu"), contact_network_vtu(s));
+}
+
 int run_case(const Case& c, const RunOptions& opt) {
   using clock = std::chrono::steady_clock;
   spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
