@@ -33,7 +33,8 @@ Sample take(const System& s, size_t pipe, size_t base, size_t lid) {
   q.T_min = INFINITY;
   q.T_max = -INFINITY;
   for (double T : P.temperature) { q.T_mean += T; q.T_min = std::min(q.T_min, T); q.T_max = std::max(q.T_max, T); }
-  q.T_mean /= double(std::max<size_t>(1, P.size()));
+  q.T_mean = P.size() ? q.T_mean / double(P.size()) : NAN;
+  if (!P.size()) q.T_min = q.T_max = NAN;
   q.T_wall = s.thermal->wall_temperature(pipe, s.time);
   const ContactForceStats fs = pair_force_stats(s);
   q.f_max = fs.max;
@@ -135,22 +136,29 @@ int run_thermal_cycle(const BedOptions& o, const ThermalCycleOptions& t) {
   }
   write_file_atomic(out / "thermal_cycle.json", j.dump(2) + "\n");
 
-  auto series = [&](const std::string& label, double Sample::*m, double scale = 1.0) {
+  // Plots from a quarter period before the first cycle (the pour and the lid drop before it
+  // would dwarf the thermal response); lid travel relative to its position at the start.
+  const double t_plot = std::max(0.0, t.start - 0.25 * t.period);
+  double lid0 = 0;
+  for (const Sample& q : samples)
+    if (q.t <= t.start + 1e-12) lid0 = q.lid_travel;
+  auto series = [&](const std::string& label, double Sample::*m, double scale = 1.0, double offset = 0.0) {
     Series sr{label, {}, {}, "lines"};
-    for (const Sample& q : samples) { sr.x.push_back(q.t); sr.y.push_back(q.*m * scale); }
+    for (const Sample& q : samples)
+      if (q.t >= t_plot) { sr.x.push_back(q.t); sr.y.push_back((q.*m - offset) * scale); }
     return sr;
   };
   std::vector<std::pair<double, std::string>> marks;
-  for (int k = 0; k <= ncyc; ++k) marks.push_back({t.start + k * t.period, k < ncyc ? "cycle " + std::to_string(k + 1) : ""});
+  for (int k = 0; k < ncyc; ++k) marks.push_back({t.start + k * t.period, "cycle " + std::to_string(k + 1)});
   PlotSpec pT, pL, pS, pF;
   pT.title = "Temperatures";
   pT.xlabel = pL.xlabel = pS.xlabel = pF.xlabel = "time (s, simulated)";
   pT.ylabel = "temperature (K)";
   pT.series = {series("pipe and base wall", &Sample::T_wall), series("bed mean", &Sample::T_mean),
                series("bed min", &Sample::T_min), series("bed max", &Sample::T_max)};
-  pL.title = "Lid travel (upward positive)";
-  pL.ylabel = "travel (um)";
-  pL.series = {series("lid", &Sample::lid_travel, 1e6)};
+  pL.title = "Lid rise since the first cycle began";
+  pL.ylabel = "lid rise (um)";
+  pL.series = {series("lid", &Sample::lid_travel, 1e6, lid0)};
   pS.title = "Stresses";
   pS.ylabel = "stress (Pa)";
   pS.series = {series("pipe wall (normal)", &Sample::pipe_stress), series("base", &Sample::base_stress),
