@@ -47,6 +47,7 @@ struct PipeMotion {
   double weight = 0;     ///< bed weight, N
   size_t particles = 0;
   double solids_fraction = 0;
+  double max_overlap = 0;  ///< largest pair overlap / smaller radius at the end
   SliceStresses stress;
 };
 PipeMotion move_pipe(const Case& c, const System& filled, size_t pipe, size_t base, double height, double velocity,

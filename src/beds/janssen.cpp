@@ -27,6 +27,7 @@ constexpr double kPaperMuK = 0.232;  // Walton (seed 001): 3 mm glass beads, 4 c
 struct Point {
   double height = 0, force = 0, force_sd = 0, weight = 0;
   size_t particles = 0;
+  double max_overlap = 0;
 };
 
 /// k, mobilised wall friction and their product from one stress profile (slices from one
@@ -104,13 +105,15 @@ PipeMotion move_pipe(const Case& c, const System& filled, size_t pipe, size_t ba
   m.weight = bed.mass * norm(t->cfg.gravity);
   m.particles = bed.count;
   m.solids_fraction = bed.phi;
+  m.max_overlap = t->max_relative_overlap();
   if (stresses && ns) {
     acc.scale(1.0 / double(ns));  // the mean of the samples
     m.stress = acc;
     write_state_vtk(*t, vtk_dir, label, true);
   }
-  spdlog::info("{}: bed height {:.4f} m ({} particles), pedestal force {:.4g} +/- {:.2g} N, weight {:.4g} N", label,
-               m.height, m.particles, m.force, m.force_sd, m.weight);
+  spdlog::info("{}: bed height {:.4f} m ({} particles), pedestal force {:.4g} +/- {:.2g} N, weight {:.4g} N, "
+               "largest overlap {:.2f}% of the radius", label, m.height, m.particles, m.force, m.force_sd, m.weight,
+               100 * m.max_overlap);
   return m;
 }
 
@@ -156,7 +159,7 @@ int run_janssen(const BedOptions& o, const JanssenOptions& jo) {
       const PipeMotion m =
           move_pipe(c, *s, pipe, base, heights[k], up ? jo.speed : -jo.speed, up ? jo.travel_up : jo.travel_down,
                     jo.settle, b0.rho_bulk, k == 0, jo.slice, k == 0 ? "janssen_" + dir : label, o.quiet, out.string());
-      pts[dir].push_back({m.height, m.force, m.force_sd, m.weight, m.particles});
+      pts[dir].push_back({m.height, m.force, m.force_sd, m.weight, m.particles, m.max_overlap});
       if (k == 0) { prof[dir] = m.stress; prof_top[dir] = z0 + m.height; }
     }
   }
@@ -203,7 +206,7 @@ int run_janssen(const BedOptions& o, const JanssenOptions& jo) {
         const double pred = pts.count("up") ? janssen_force(up ? JanssenMode::Silo : JanssenMode::Piston, up_fit.mu_k, p.height, js) : NAN;
         csv.row({up ? 1.0 : 0.0, p.height, p.force, p.force_sd, p.weight, double(p.particles), fit, pred});
         j["points"][dir].push_back({{"height", p.height}, {"force", p.force}, {"force_sd", p.force_sd}, {"weight", p.weight},
-                                    {"particles", p.particles}});
+                                    {"particles", p.particles}, {"max_overlap", p.max_overlap}});
       }
     j["paper_mu_k"] = kPaperMuK;
 

@@ -78,9 +78,11 @@ int run_vibrate(const BedOptions& o, const VibrateOptions& v) {
   j["case"] = c.name;
   j["shaking"] = {{"amplitude", v.amplitude}, {"frequency", v.frequency}, {"cycles", cycles}, {"Gamma", Gamma}};
   j["loose"] = {{"solids_fraction", loose.phi}, {"height", loose.height}, {"piston_height", a.height},
-                {"piston_force", a.force}, {"piston_force_sd", a.force_sd}, {"weight", a.weight}, {"mu_k", muk(a, loose.rho_bulk)}};
+                {"piston_force", a.force}, {"piston_force_sd", a.force_sd}, {"weight", a.weight}, {"mu_k", muk(a, loose.rho_bulk)},
+                {"max_overlap", a.max_overlap}};
   j["dense"] = {{"solids_fraction", packed.phi}, {"height", packed.height}, {"piston_height", b.height},
-                {"piston_force", b.force}, {"piston_force_sd", b.force_sd}, {"weight", b.weight}, {"mu_k", muk(b, packed.rho_bulk)}};
+                {"piston_force", b.force}, {"piston_force_sd", b.force_sd}, {"weight", b.weight}, {"mu_k", muk(b, packed.rho_bulk)},
+                {"max_overlap", b.max_overlap}};
   j["densification_percent"] = 100 * (packed.phi / loose.phi - 1);
   j["force_ratio"] = b.force / a.force;
   j["paper"] = "up to 5x the piston force for 3.5% denser packing (Arroyo-Cetto et al. 2003, cited by Walton)";
