@@ -95,7 +95,7 @@ int run_thermal_cycle(const BedOptions& o, const ThermalCycleOptions& t) {
   j["case"] = c.name;
   j["period"] = t.period;
   j["time_scale"] = s->thermal->settings().time_scale;
-  const int ncyc = int(std::floor((s->time - t.start) / t.period + 1e-9));
+  const int ncyc = int(std::floor((s->time - t.start) / t.period + 1e-6));  // time is a sum of steps
   const Sample* before = nullptr;
   for (const Sample& q : samples)
     if (q.t <= t.start + 1e-12) before = &q;
@@ -136,9 +136,9 @@ int run_thermal_cycle(const BedOptions& o, const ThermalCycleOptions& t) {
   }
   write_file_atomic(out / "thermal_cycle.json", j.dump(2) + "\n");
 
-  // Plots from a quarter period before the first cycle (the pour and the lid drop before it
+  // Plots from a tenth of a period before the first cycle (the pour and the lid drop before it
   // would dwarf the thermal response); lid travel relative to its position at the start.
-  const double t_plot = std::max(0.0, t.start - 0.25 * t.period);
+  const double t_plot = std::max(0.0, t.start - 0.1 * t.period);
   double lid0 = 0;
   for (const Sample& q : samples)
     if (q.t <= t.start + 1e-12) lid0 = q.lid_travel;
@@ -156,6 +156,13 @@ int run_thermal_cycle(const BedOptions& o, const ThermalCycleOptions& t) {
   pT.ylabel = "temperature (K)";
   pT.series = {series("pipe and base wall", &Sample::T_wall), series("bed mean", &Sample::T_mean),
                series("bed min", &Sample::T_min), series("bed max", &Sample::T_max)};
+  {  // room above the curves for the legend
+    double lo = INFINITY, hi = -INFINITY;
+    for (const auto& sr : pT.series)
+      for (double y : sr.y)
+        if (std::isfinite(y)) { lo = std::min(lo, y); hi = std::max(hi, y); }
+    if (hi > lo) pT.yrange = std::pair{lo - 0.05 * (hi - lo), hi + 0.4 * (hi - lo)};
+  }
   pL.title = "Lid rise since the first cycle began";
   pL.ylabel = "lid rise (um)";
   pL.series = {series("lid", &Sample::lid_travel, 1e6, lid0)};
