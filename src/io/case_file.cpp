@@ -645,25 +645,21 @@ Case parse(toml::table& root, const std::string& file) {
     c.thermal.sources.push_back(hs);
   }
   if (c.thermal.enabled) {
-    auto need = [&](int m, const std::string& where) {
+    auto need_heat_capacity = [&](int m, const std::string& where) {
       const Material& mat = c.materials[m];
       if (!(mat.heat_capacity > 0))
         throw InputError(file, material_line[m], "material." + mat.name + ".heat_capacity",
                          "particles of this material (" + where + ") need heat_capacity > 0 J/(kg K) when the case has [thermal]");
-      if (c.thermal.contact_radius == ThermalSettings::SpotRadius::HertzForce && mat.conductivity > 0 &&
-          !(mat.E > 0 || mat.E_conduction > 0))
-        throw InputError(file, material_line[m], "material." + mat.name + ".conduction_youngs_modulus",
-                         "thermal.contact_radius = \"hertz_force\" needs youngs_modulus or conduction_youngs_modulus > 0");
     };
-    for (const auto& st : c.inserts) need(st.spec.species, st.key);
-    for (const auto& p : c.particles) need(p.material, "[[particle]]");
-    for (const Wall& w : c.walls) {
-      const Material& mat = c.materials[w.material];
-      if (c.thermal.contact_radius == ThermalSettings::SpotRadius::HertzForce && mat.conductivity > 0 &&
-          !(mat.E > 0 || mat.E_conduction > 0))
-        throw InputError(file, material_line[w.material], "material." + mat.name + ".conduction_youngs_modulus",
-                         "thermal.contact_radius = \"hertz_force\" needs youngs_modulus or conduction_youngs_modulus > 0");
-    }
+    for (const auto& st : c.inserts) need_heat_capacity(st.spec.species, st.key);
+    for (const auto& p : c.particles) need_heat_capacity(p.material, "[[particle]]");
+    if (c.thermal.contact_radius == ThermalSettings::SpotRadius::HertzForce)
+      for (int m = 0; m < nm; ++m) {
+        const Material& mat = c.materials[m];
+        if (mat.conductivity > 0 && !(mat.E > 0 || mat.E_conduction > 0))
+          throw InputError(file, material_line[m], "material." + mat.name + ".conduction_youngs_modulus",
+                           "thermal.contact_radius = \"hertz_force\" needs youngs_modulus or conduction_youngs_modulus > 0");
+      }
   }
 
   // [output]
