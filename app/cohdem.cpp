@@ -3,6 +3,7 @@
 //   cohdem check CASE [--set key=value]...
 //   cohdem contact --model NAME --set k=v... --ri R [--rj R | --wall] --path PATH.csv [--out DIR]
 //   cohdem models
+//   cohdem bed packing|janssen|vibrate|thermal-cycle CASE [--set key=value]... [options]
 // Exit status: 0 success, 1 time-step audit failed (check), 2 bad input, 3 run failure.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "beds/bed_protocols.hpp"
 #include "core/error.hpp"
 #include "io/case_file.hpp"
 #include "io/contact_cmd.hpp"
@@ -76,6 +78,60 @@ int main(int argc, char** argv) {
   contact->add_option("--dt", cc.dt, "duration of one path row, s (> 0 turns damping on; default quasi-static)");
   contact->add_flag("--no-plot", [&](int64_t) { cc.plot = false; }, "write the CSV only");
 
+  // Packed-bed protocols (docs/packed-beds.md).
+  beds::BedOptions bo;
+  auto* bed = app.add_subcommand("bed", "packed-bed validation protocols (docs/packed-beds.md)");
+  bed->require_subcommand(1);
+  auto common = [&](CLI::App* a) {
+    a->add_option("case", bo.case_path, "case file (TOML), e.g. examples/beds/janssen.toml")->required();
+    a->add_option("--set", bo.sets, "override a case-file key")->take_all();
+    a->add_option("--out", bo.out_dir, "output folder (overrides [output] folder)");
+    a->add_option("--threads", bo.threads, "OpenMP threads")->check(CLI::NonNegativeNumber);
+    a->add_flag("--quiet", bo.quiet, "no progress lines");
+  };
+  beds::PackingOptions po;
+  std::string seeds = "1";
+  auto* packing = bed->add_subcommand("packing", "solids fraction and its profile between two walls, over seeds");
+  common(packing);
+  packing->add_option("--seeds", seeds, "comma-separated random seeds (default 1)");
+  packing->add_option("--bins-per-diameter", po.bins_per_diameter, "profile bins per particle diameter")->check(CLI::PositiveNumber);
+  packing->add_option("--band-margin", po.band_margin, "band for the mean: diameters above the floor and below the top");
+  beds::JanssenOptions jo;
+  std::string heights;
+  auto* janssen = bed->add_subcommand("janssen", "pedestal force against bed height, pipe wall moving up and/or down");
+  common(janssen);
+  janssen->add_option("--pipe", jo.pipe, "name of the pipe wall (cylinder, axis z)");
+  janssen->add_option("--base", jo.base, "name of the pedestal wall (plane, normal +z)");
+  janssen->add_option("--heights", heights, "comma-separated bed heights, m (default: --count up to 90% of the fill)");
+  janssen->add_option("--count", jo.count, "number of bed heights")->check(CLI::PositiveNumber);
+  janssen->add_option("--speed", jo.speed, "pipe speed, m/s")->check(CLI::PositiveNumber);
+  janssen->add_option("--travel-up", jo.travel_up, "pipe travel, wall up, m")->check(CLI::PositiveNumber);
+  janssen->add_option("--travel-down", jo.travel_down, "pipe travel, wall down, m")->check(CLI::PositiveNumber);
+  janssen->add_option("--settle", jo.settle, "settling time after trimming, s")->check(CLI::NonNegativeNumber);
+  janssen->add_option("--direction", jo.direction, "up, down or both")->check(CLI::IsMember({"up", "down", "both"}));
+  janssen->add_option("--slice", jo.slice, "stress slice height, particle diameters")->check(CLI::PositiveNumber);
+  beds::VibrateOptions vo;
+  auto* vibrate = bed->add_subcommand("vibrate", "densify by vertical shaking; solids fraction and piston force before/after");
+  common(vibrate);
+  vibrate->add_option("--pipe", vo.pipe, "name of the pipe wall");
+  vibrate->add_option("--base", vo.base, "name of the pedestal wall");
+  vibrate->add_option("--amplitude", vo.amplitude, "shaking amplitude, m")->check(CLI::PositiveNumber);
+  vibrate->add_option("--frequency", vo.frequency, "shaking frequency, Hz")->check(CLI::PositiveNumber);
+  vibrate->add_option("--cycles", vo.cycles, "shaking cycles")->check(CLI::PositiveNumber);
+  vibrate->add_option("--settle", vo.settle, "settling time after shaking, s")->check(CLI::NonNegativeNumber);
+  vibrate->add_option("--height", vo.height, "bed height for the piston test, m (default: 90% of the shorter bed)");
+  vibrate->add_option("--speed", vo.speed, "pipe speed in the piston test, m/s")->check(CLI::PositiveNumber);
+  vibrate->add_option("--travel", vo.travel, "pipe travel in the piston test, m")->check(CLI::PositiveNumber);
+  beds::ThermalCycleOptions to;
+  auto* cycle = bed->add_subcommand("thermal-cycle", "thermal cycling under a spring-loaded lid: peaks per cycle");
+  common(cycle);
+  cycle->add_option("--pipe", to.pipe, "name of the pipe wall");
+  cycle->add_option("--base", to.base, "name of the base wall");
+  cycle->add_option("--lid", to.lid, "name of the lid wall (spring control)");
+  cycle->add_option("--start", to.start, "start of the first cycle, s")->check(CLI::NonNegativeNumber);
+  cycle->add_option("--period", to.period, "cycle length, s")->required()->check(CLI::PositiveNumber);
+  cycle->add_option("--sample", to.sample, "s between samples")->check(CLI::PositiveNumber);
+
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   if (const char* lv = std::getenv("COHDEM_LOG")) spdlog::set_level(spdlog::level::from_str(lv));
@@ -96,6 +152,19 @@ int main(int argc, char** argv) {
         cc.materials = {materials.substr(0, comma), comma == std::string::npos ? "" : materials.substr(comma + 1)};
       }
       return run_contact(cc);
+    }
+    if (bed->parsed()) {
+      if (packing->parsed()) {
+        po.seeds.clear();
+        for (double v : beds::parse_list(seeds, "--seeds")) po.seeds.push_back(int(v));
+        return beds::run_packing(bo, po);
+      }
+      if (janssen->parsed()) {
+        if (!heights.empty()) jo.heights = beds::parse_list(heights, "--heights");
+        return beds::run_janssen(bo, jo);
+      }
+      if (vibrate->parsed()) return beds::run_vibrate(bo, vo);
+      if (cycle->parsed()) return beds::run_thermal_cycle(bo, to);
     }
     if (models->parsed()) {
       for (const auto& name : contact_model_names()) {

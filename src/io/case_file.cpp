@@ -128,6 +128,31 @@ Region read_region(Section s, const std::string& name) {
   return r;
 }
 
+/// A number, or a schedule table `{ times = [...], values = [...], period = P }` (piecewise
+/// linear in time, repeated every P s when P > 0); values checked against [lo, hi].
+Schedule read_schedule(Section& s, const std::string& key, double lo, double hi, const char* unit) {
+  const toml::node* n = s.node(key);
+  if (n && n->is_table()) {
+    Section t = *s.table(key);
+    Schedule sc;
+    sc.times = t.numbers("times", std::nullopt);
+    sc.values = t.numbers("values", std::nullopt);
+    sc.period = t.num("period", 0.0, 0, kInf, false, "s");
+    t.finish();
+    if (sc.times.empty()) t.fail("times", "expected at least one time");
+    if (sc.values.size() != sc.times.size()) t.fail("values", "expected one value per time");
+    for (size_t k = 1; k < sc.times.size(); ++k)
+      if (!(sc.times[k] > sc.times[k - 1])) t.fail("times", "times must increase");
+    for (double v : sc.values)
+      if (v < lo || v > hi) t.fail("values", "value " + std::to_string(v) + " out of range " + unit);
+    if (sc.period > 0 && sc.period < sc.times.back() - sc.times.front())
+      t.fail("period", "the period must be at least times[last] - times[0]");
+    return sc;
+  }
+  if (n && !n->is_number()) s.fail(key, std::string("expected a number (") + unit + ") or a schedule table { times, values, period }");
+  return Schedule::constant(s.num(key, std::nullopt, lo, hi, false, unit));
+}
+
 int material_index(const Case& c, Section& s, const std::string& key) {
   const std::string name = s.str(key, std::nullopt);
   for (size_t i = 0; i < c.materials.size(); ++i)
@@ -203,6 +228,19 @@ Case parse(toml::table& root, const std::string& file) {
     s.finish();
   }
 
+  // [thermal] (heat conduction and thermal expansion; docs/packed-beds.md)
+  if (auto s = top.table("thermal")) {
+    c.thermal.enabled = true;
+    c.cfg.initial_temperature = s->num("initial_temperature", 293.15, 0, kInf, true, "K");
+    c.thermal.time_scale = s->num("time_scale", 1.0, 0, kInf, true, "");
+    c.thermal.expansion = s->boolean("expansion", true);
+    c.thermal.contact_radius = s->str("contact_radius", "model", {"model", "hertz_force"}) == "model"
+                                   ? ThermalSettings::SpotRadius::Model
+                                   : ThermalSettings::SpotRadius::HertzForce;
+    s->finish();
+  }
+  std::vector<int> material_line;
+
   // [[material]]
   for (Section s : top.tables("material")) {
     Material m;
@@ -213,6 +251,12 @@ Case parse(toml::table& root, const std::string& file) {
     m.E = s.num("youngs_modulus", 0.0, 0, kInf, false, "Pa");
     m.nu = s.num("poisson_ratio", 0.25, -1, 0.5, true, "");
     if (m.nu >= 0.5) s.fail("poisson_ratio", "Poisson ratio must be < 0.5");
+    m.conductivity = s.num("thermal_conductivity", 0.0, 0, kInf, false, "W/(m K)");
+    m.heat_capacity = s.num("heat_capacity", 0.0, 0, kInf, false, "J/(kg K)");
+    m.expansion = s.num("thermal_expansion", 0.0, -1e-2, 1e-2, false, "1/K");
+    m.T_ref = s.num("reference_temperature", c.cfg.initial_temperature, 0, kInf, true, "K");
+    m.E_conduction = s.num("conduction_youngs_modulus", 0.0, 0, kInf, false, "Pa");
+    material_line.push_back(s.line());
     s.finish();
     c.materials.push_back(m);
   }
@@ -275,6 +319,15 @@ Case parse(toml::table& root, const std::string& file) {
       o->finish();
     }
     const std::string control = s.str("control", "prescribed", {"prescribed", "servo", "spring"});
+    WallThermal wt;
+    if (s.has("temperature")) {
+      if (!c.thermal.enabled) s.fail("temperature", "a wall temperature needs a [thermal] table");
+      wt.fixed = true;
+      wt.temperature = read_schedule(s, "temperature", 1e-9, kInf, "K");
+      if (!(c.materials[w.material].conductivity > 0))
+        s.fail("temperature", "a wall at a fixed temperature conducts through its material: give material '" +
+                                  c.materials[w.material].name + "' a thermal_conductivity > 0");
+    }
     std::vector<Wall> made;
     if (type == "plane") {
       w.shape = WallShape::Plane;
@@ -317,6 +370,10 @@ Case parse(toml::table& root, const std::string& file) {
         m.control = control == "servo" ? WallControl::Servo : WallControl::Spring;
       }
     }
+    if (control != "prescribed") {
+      const double t0 = s.num("control_start", 0.0, 0, kInf, false, "s");
+      for (Wall& m : made) m.control_start = t0;
+    }
     if (control == "servo") {
       const double F = s.num("target_force", std::nullopt, 0, kInf, false, "N");
       const double g = s.num("servo_gain", std::nullopt, 0, kInf, true, "m/(N s)");
@@ -331,7 +388,10 @@ Case parse(toml::table& root, const std::string& file) {
     s.finish();
     for (const Wall& o : c.walls)
       if (o.name == w.name) s.fail("name", "wall '" + w.name + "' defined twice");
-    for (Wall& m : made) c.walls.push_back(m);
+    for (Wall& m : made) {
+      c.walls.push_back(m);
+      c.thermal.walls.push_back(wt);
+    }
   }
 
   // [[insert]]
@@ -374,6 +434,10 @@ Case parse(toml::table& root, const std::string& file) {
     p.v = s.vec3("velocity", Vec3{});
     p.omega = s.vec3("omega", Vec3{});
     p.frozen = s.boolean("frozen", false);
+    if (s.has("temperature")) {
+      if (!c.thermal.enabled) s.fail("temperature", "a particle temperature needs a [thermal] table");
+      p.temperature = s.num("temperature", std::nullopt, 0, kInf, true, "K");
+    }
     if (s.has("attach_to")) {
       const std::string wn = s.str("attach_to", std::nullopt);
       for (size_t w = 0; w < c.walls.size(); ++w)
@@ -391,6 +455,35 @@ Case parse(toml::table& root, const std::string& file) {
   if (c.inserts.empty() && c.particles.empty() && !c.ring_shear)
     top.fail("insert", "the case has no particles: add an [[insert]] or [[particle]]");
 
+  // [[heat_source]]
+  for (Section s : top.tables("heat_source")) {
+    if (!c.thermal.enabled) s.fail("specific_power", "a heat source needs a [thermal] table");
+    HeatSource hs;
+    hs.name = s.str("name", s.path());
+    hs.specific_power = read_schedule(s, "specific_power", -kInf, kInf, "W/kg");
+    if (s.has("material")) hs.material = material_index(c, s, "material");
+    if (auto r = s.table("region")) hs.region = read_region(*r, s.path());
+    s.finish();
+    c.thermal.sources.push_back(hs);
+  }
+  if (c.thermal.enabled) {
+    auto need_heat_capacity = [&](int m, const std::string& where) {
+      const Material& mat = c.materials[m];
+      if (!(mat.heat_capacity > 0))
+        throw InputError(file, material_line[m], "material." + mat.name + ".heat_capacity",
+                         "particles of this material (" + where + ") need heat_capacity > 0 J/(kg K) when the case has [thermal]");
+    };
+    for (const auto& st : c.inserts) need_heat_capacity(st.spec.species, st.key);
+    for (const auto& p : c.particles) need_heat_capacity(p.material, "[[particle]]");
+    if (c.thermal.contact_radius == ThermalSettings::SpotRadius::HertzForce)
+      for (int m = 0; m < nm; ++m) {
+        const Material& mat = c.materials[m];
+        if (mat.conductivity > 0 && !(mat.E > 0 || mat.E_conduction > 0))
+          throw InputError(file, material_line[m], "material." + mat.name + ".conduction_youngs_modulus",
+                           "thermal.contact_radius = \"hertz_force\" needs youngs_modulus or conduction_youngs_modulus > 0");
+      }
+  }
+
   // [output]
   if (auto s = top.table("output")) {
     c.output.folder = s->str("folder", "out");
@@ -400,16 +493,24 @@ Case parse(toml::table& root, const std::string& file) {
     c.output.progress_interval = s->num("progress_interval", 5.0, 0, kInf, true, "s");
     c.output.vtk = s->boolean("vtk", true);
     c.output.checkpoint_interval = s->num("checkpoint_interval", 600.0, 0, kInf, false, "s");
+    c.output.contacts = s->boolean("contacts", false);
+    c.cfg.record_contact_radii = c.output.contacts;  // the network shows each contact's radius
     c.output.probes = s->strings("probes", std::vector<std::string>{});
     static const std::vector<std::string> known = {"kinetic_energy", "rotational_energy", "contacts",
                                                    "max_overlap", "mean_velocity", "max_velocity",
-                                                   "coordination", "particles", "rebuilds", "bed_height"};
+                                                   "coordination", "particles", "rebuilds", "bed_height",
+                                                   "max_contact_force", "mean_contact_force", "mean_temperature",
+                                                   "min_temperature", "max_temperature"};
     for (const auto& p : c.output.probes)
       if (std::find(known.begin(), known.end(), p) == known.end())
         s->fail("probes", "unknown probe '" + p + "'; known probes: " + Section::join(known));
     s->finish();
   }
-  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output", "ring_shear"});
+  for (const auto& p : c.output.probes)
+    if (p.find("temperature") != std::string::npos && !c.thermal.enabled)
+      throw InputError(file, 0, "output.probes", "probe '" + p + "' needs a [thermal] table");
+  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output", "ring_shear", "thermal",
+              "heat_source"});
 
   // Derived defaults.
   double rmax = 0, rmin = kInf;
@@ -457,9 +558,11 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
   s->rng = Rng(c.seed);
   s->set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
   s->walls = c.walls;
+  if (c.thermal.enabled) s->thermal = std::make_shared<ThermalModel>(c.thermal, c.materials);
   for (const auto& p : c.particles) {
     if (!fill) break;
     const size_t i = s->add_particle(p.material, p.radius, p.x, p.v, p.omega);
+    if (p.temperature > 0) s->particles.temperature[i] = p.temperature;
     if (p.frozen) s->particles.flag[i] = kFrozen;
     if (p.attach_wall >= 0) { s->particles.flag[i] = kAttached; s->particles.body[i] = p.attach_wall; }
   }

@@ -12,6 +12,7 @@
 #include "models/params.hpp"
 #include "particles/insertion.hpp"
 #include "sim/system.hpp"
+#include "thermal/thermal.hpp"
 
 namespace cohdem {
 
@@ -23,6 +24,7 @@ struct OutputSettings {
   double progress_interval = 5; ///< wall-clock s between progress lines
   bool vtk = true;
   double checkpoint_interval = 600;  ///< wall-clock s between checkpoints (0: only at the end)
+  bool contacts = false;        ///< also write the contact network (contacts_*.vtu)
 };
 
 struct InsertStep {
@@ -39,6 +41,7 @@ struct ExplicitParticle {
   Vec3 x, v, omega;
   bool frozen = false;
   int attach_wall = -1;
+  double temperature = 0;       ///< K (0: thermal.initial_temperature)
 };
 
 struct Case {
@@ -57,6 +60,7 @@ struct Case {
   std::vector<ExplicitParticle> particles;
   OutputSettings output;
   std::optional<RingShearSpec> ring_shear;  ///< [ring_shear]: run the ring shear tester
+  ThermalSettings thermal;      ///< [thermal], wall temperatures, [[heat_source]]
 
   uint64_t steps() const;
 };

@@ -17,8 +17,10 @@
 #include "io/checkpoint.hpp"
 #include "apps/ring_shear.hpp"
 #include <fstream>
+#include "io/contact_network.hpp"
 #include "io/csv.hpp"
 #include "io/vtk.hpp"
+#include "thermal/thermal.hpp"
 
 namespace cohdem {
 
@@ -118,6 +120,7 @@ VtuData particles_frame(const System& s) {
   d.add_point_vector("force", P.force);
   d.add_point_u8("flag", P.flag);
   d.add_point_scalar("temperature", P.temperature);
+  if (s.thermal) d.add_point_scalar("heat_flow", P.heat_flow);
   return d;
 }
 
@@ -135,6 +138,10 @@ Series series_columns(const Case& c, const System& s) {
     for (const char* q : {"fx", "fy", "fz", "tx", "ty", "tz"}) S.cols.push_back("wall." + w.name + "." + q);
     if (w.control != WallControl::Prescribed) S.cols.push_back("wall." + w.name + ".travel");
   }
+  if (s.thermal)
+    for (size_t w = 0; w < s.walls.size(); ++w)
+      if (s.thermal->wall_fixed(w))
+        for (const char* q : {"temperature", "heat"}) S.cols.push_back("wall." + s.walls[w].name + "." + q);
   return S;
 }
 
@@ -144,6 +151,14 @@ double probe(const std::string& name, const System& s) {
   if (name == "max_overlap") return s.max_relative_overlap();
   if (name == "particles") return double(P.size());
   if (name == "rebuilds") return s.rebuild_count();
+  if (name == "max_contact_force") return pair_force_stats(s).max;
+  if (name == "mean_contact_force") return pair_force_stats(s).mean;
+  if (name.ends_with("_temperature")) {
+    double lo = INFINITY, hi = -INFINITY, sum = 0;
+    for (double T : P.temperature) { lo = std::min(lo, T); hi = std::max(hi, T); sum += T; }
+    if (P.size() == 0) return 0.0;
+    return name == "min_temperature" ? lo : name == "max_temperature" ? hi : sum / double(P.size());
+  }
   double sum = 0, mx = 0, top = -INFINITY;
   size_t nf = 0;
   for (size_t i = 0; i < P.size(); ++i) {
@@ -170,6 +185,12 @@ void fill_row(const Case& c, const System& s, Series& S) {
     for (int d = 0; d < 3; ++d) S.row.push_back(w.torque[d]);
     if (w.control != WallControl::Prescribed) S.row.push_back(w.travel);
   }
+  if (s.thermal)
+    for (size_t w = 0; w < s.walls.size(); ++w)
+      if (s.thermal->wall_fixed(w)) {
+        S.row.push_back(s.thermal->wall_temperature(w, s.time));
+        S.row.push_back(w < s.thermal->wall_heat.size() ? s.thermal->wall_heat[w] : 0.0);
+      }
 }
 
 void check_finite(const System& s) {
@@ -198,6 +219,13 @@ void reset_peak_rss() {
 }
 
 }  // namespace
+
+void write_state_vtk(const System& s, const std::string& dir, const std::string& tag, bool contacts) {
+  const fs::path d(dir);
+  write_vtu(d / ("particles_" + tag + ".vtu"), particles_frame(s));
+  if (!s.walls.empty()) write_vtu(d / ("walls_" + tag + ".vtu"), walls_vtu(s));
+  if (contacts) write_vtu(d / ("contacts_" + tag + ".vtu"), contact_network_vtu(s));
+}
 
 int run_case(const Case& c, const RunOptions& opt) {
   if (c.ring_shear) {
@@ -251,7 +279,7 @@ int run_case(const Case& c, const RunOptions& opt) {
   }
   CsvWriter csv(out / "series.csv", S.cols);
   for (const auto& r : old_rows) csv.row(r);
-  PvdSeries pvd_p(out / "particles.pvd"), pvd_w(out / "walls.pvd");
+  PvdSeries pvd_p(out / "particles.pvd"), pvd_w(out / "walls.pvd"), pvd_c(out / "contacts.pvd");
   int frame = 0;
   for (const auto& f : frames) {
     if (f["time"].get<double>() > s.time) break;
@@ -279,6 +307,11 @@ int run_case(const Case& c, const RunOptions& opt) {
       write_vtu(out / name, walls_vtu(s));
       pvd_w.add(s.time, name);
       frames.back()["walls"] = name;
+    }
+    if (c.output.contacts) {
+      std::snprintf(name, sizeof name, "contacts_%05d.vtu", frame);
+      write_vtu(out / name, contact_network_vtu(s));
+      pvd_c.add(s.time, name);
     }
     ++frame;
   };
@@ -361,6 +394,16 @@ int run_case(const Case& c, const RunOptions& opt) {
                          {"audit_velocity", audit.velocity}};
   for (const Wall& w : s.walls)
     j["walls"][w.name] = {{"force", {w.force.x, w.force.y, w.force.z}}, {"torque", {w.torque.x, w.torque.y, w.torque.z}}};
+  if (s.thermal) {
+    double lo = INFINITY, hi = -INFINITY, sum = 0;
+    for (double T : s.particles.temperature) { lo = std::min(lo, T); hi = std::max(hi, T); sum += T; }
+    const size_t np = s.particles.size();
+    j["thermal"] = {{"mean_temperature", np ? sum / double(np) : 0.0}, {"min_temperature", np ? lo : 0.0},
+                    {"max_temperature", np ? hi : 0.0}, {"time_scale", s.thermal->settings().time_scale},
+                    {"last_stability_ratio", s.thermal->stability}};
+    for (size_t w = 0; w < s.walls.size(); ++w)
+      if (s.thermal->wall_fixed(w)) j["walls"][s.walls[w].name]["heat"] = s.thermal->wall_heat[w];
+  }
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   spdlog::info("done: {} steps in {:.2f} s ({:.3g} particle-steps/s), {} frames, final KE {:.4g} J, {} contacts",
                nsteps, wall_s, double(j["particle_steps_per_s"]), frame, s.kinetic_energy(), s.contact_count());
@@ -424,6 +467,15 @@ int check_case(const Case& c) {
   const double per_entry = 4 + 1 + 1 + 4 + 3 * 24 + double(s.model->state_size());
   const double bytes = total * (per_particle + 8 * per_entry);
   fmt::print("memory estimate: {:.1f} MiB ({:.0f} bytes per particle)\n", bytes / 1048576.0, per_particle + 8 * per_entry);
+  if (c.thermal.enabled) {
+    int fixed = 0;
+    for (const auto& w : c.thermal.walls) fixed += w.fixed;
+    fmt::print("thermal: initial temperature {:.6g} K, time_scale {:.4g}, expansion {}, contact radius from {}, "
+               "{} fixed-temperature walls, {} heat sources\n",
+               c.cfg.initial_temperature, c.thermal.time_scale, c.thermal.expansion ? "on" : "off",
+               c.thermal.contact_radius == ThermalSettings::SpotRadius::Model ? "the contact law" : "the Hertz force",
+               fixed, c.thermal.sources.size());
+  }
   for (const auto& m : a.messages) fmt::print("{}: {}\n", a.level == TimestepAudit::Error ? "error" : "warning", m);
   if (a.level == TimestepAudit::Error) {
     fmt::print(stderr, "error: {}:{}: key 'simulation.dt': time step past its hard bound\n", c.file, c.dt_line);

@@ -22,6 +22,10 @@ double audit_velocity(const Case& c);
 /// Runs a case to completion. Throws InputError/RunError; returns the exit status.
 int run_case(const Case& c, const RunOptions& opt);
 
+/// Writes one state as particles_TAG.vtu, walls_TAG.vtu and (with `contacts`) contacts_TAG.vtu
+/// in `dir`: the same arrays as the frames of `cohdem run`.
+void write_state_vtk(const System& s, const std::string& dir, const std::string& tag, bool contacts);
+
 /// `cohdem check`: validates and prints derived quantities; returns the exit status
 /// (0 ok, 1 time step past its hard bound).
 int check_case(const Case& c);

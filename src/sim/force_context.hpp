@@ -25,6 +25,10 @@ struct ForceContext {
   double kick = 0;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
+  /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
+  /// (conduction, contact network).
+  double* a_pair = nullptr;
+  double* a_wall = nullptr;
 };
 
 }  // namespace cohdem

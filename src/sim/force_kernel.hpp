@@ -129,6 +129,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         T += out.ti;
         in_f[q] = out.f;
         in_tj[q] = out.tj;
+        if (c.a_pair) c.a_pair[k] = out.a;
       } else {
         in_f[q] = Vec3{};
         in_tj[q] = Vec3{};
@@ -177,6 +178,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         f_wall[e] = out.f;
         tw_wall[e] = out.tj;
         c_wall[e] = cp;
+        if (c.a_wall) c.a_wall[e] = out.a;
       }
     }
     if (flag[i] == kFree) F += grav * mass[i];

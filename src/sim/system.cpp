@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "sim/force_context.hpp"
+#include "thermal/thermal.hpp"
 
 namespace cohdem {
 
@@ -36,7 +37,7 @@ void System::set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamS
 
 size_t System::add_particle(int species, double r, const Vec3& x, const Vec3& v, const Vec3& w) {
   dirty_ = true;
-  return particles.add(next_id++, species, r, materials.at(species).density, x, v, w);
+  return particles.add(next_id++, species, r, materials.at(species).density, x, v, w, cfg.initial_temperature);
 }
 
 Vec3 System::initial_velocity(const InsertSpec& spec) {
@@ -76,6 +77,7 @@ void System::prepare() {
   nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
   if (has_pending_) install_pending();
   compute_forces();
+  if (thermal) thermal->update(*this, false);
   dirty_ = false;
 }
 
@@ -163,6 +165,7 @@ void System::move_walls(double dt) {
 
 void System::control_walls(double dt) {
   for (Wall& W : walls) {
+    if (time < W.control_start) continue;  // held (e.g. a lid released once the bed has settled)
     switch (W.control) {
       case WallControl::Prescribed: break;
       case WallControl::Servo: {
@@ -199,8 +202,15 @@ void System::do_pours() {
 void System::compute_forces(double kick) {
   const size_t nw = nl.wall_entry_count();
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
+  const bool radii = thermal || cfg.record_contact_radii;
+  if (radii) {
+    if (a_pair_.size() < nl.pair_count()) a_pair_.resize(nl.pair_count());
+    if (a_wall_.size() < nw) a_wall_.resize(nw);
+  }
   // Gravity is added by the kernel, after the contact forces of each free particle.
   ForceContext ctx{particles, nl, walls, cfg.dt, time, f_wall_, tw_wall_, c_wall_, cfg.gravity, kick, cfg.parallel_min};
+  ctx.a_pair = radii ? a_pair_.data() : nullptr;
+  ctx.a_wall = radii ? a_wall_.data() : nullptr;
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
@@ -254,6 +264,7 @@ void System::step_once() {
     dirty_ = false;
   }
   compute_forces(h);  // forces, then the closing half kick of every free particle
+  if (thermal) thermal->update(*this, true);  // heat flow, temperatures, radii
   control_walls(dt);
 }
 

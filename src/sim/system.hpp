@@ -22,6 +22,12 @@ struct Material {
   double density = 0;  ///< kg/m^3
   double E = 0;        ///< Young's modulus, Pa (0: not given; Hertz-type models need it)
   double nu = 0;       ///< Poisson ratio
+  // Thermal properties (thermal/thermal.hpp; used only when the case has [thermal]).
+  double conductivity = 0;    ///< thermal conductivity k_s, W/(m K) (0: does not conduct)
+  double heat_capacity = 0;   ///< specific heat c, J/(kg K)
+  double expansion = 0;       ///< linear thermal expansion coefficient alpha, 1/K
+  double T_ref = 0;           ///< temperature at which radii are as given, K (0: initial temperature)
+  double E_conduction = 0;    ///< Young's modulus for the Hertz spot radius in conduction, Pa (0: E)
 };
 
 struct SimConfig {
@@ -34,7 +40,13 @@ struct SimConfig {
   /// Below this many particles a step runs on one thread: the OpenMP fork/join cost outweighs
   /// the work (results do not depend on the thread count either way).
   long parallel_min = 4000;
+  double initial_temperature = 293.15;  ///< K, given to every new particle
+  /// Record each contact's radius in the force pass (set when the contact network is written;
+  /// always on with a thermal model).
+  bool record_contact_radii = false;
 };
+
+class ThermalModel;  // thermal/thermal.hpp
 
 /// Pouring: inserts `spec.count` particles over time at `rate` particles per second.
 struct PourSource {
@@ -57,6 +69,8 @@ class System {
   double time = 0;
   uint64_t step = 0;
   uint64_t next_id = 0;
+  /// Heat conduction and thermal expansion, run after every force pass (null: none).
+  std::shared_ptr<ThermalModel> thermal;
 
   /// Sets the contact model and its per-pair parameters (pair_params[i*n+j], n = materials).
   void set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamSet>& pair_params);
@@ -64,6 +78,10 @@ class System {
   size_t add_particle(int species, double r, const Vec3& x, const Vec3& v = {}, const Vec3& w = {});
   /// Inserts particles at random (count or solids fraction); returns how many.
   size_t insert(const InsertSpec& spec);
+
+  /// Deletes the particles with remove[i] != 0 (trimming a bed), keeping the contact history
+  /// of the others; lists and forces are rebuilt before the next step (sim/remove_particles.cpp).
+  void remove_particles(const std::vector<uint8_t>& remove);
 
   /// Builds lists and evaluates forces at the current state (call once before stepping,
   /// and after changing particles or walls by hand).
@@ -97,6 +115,16 @@ class System {
   double reach() const { return reach_; }
   double rebuild_count() const { return double(nl.stats.builds); }
 
+  // Per-contact results of the last force pass, indexed like nl.jdx (pairs) and nl.wall (wall
+  // entries); valid where nl.hist.live / nl.whist.live. Forces act on the particle (pair: on i).
+  // Contact radii are recorded only with a thermal model or SimConfig::record_contact_radii.
+  /// Force on i of pair entry k (zero when not live); kept by the kernel in j's transposed slot.
+  Vec3 pair_force(size_t k) const { return nl.in_f[nl.rslot[k]]; }
+  const std::vector<double>& pair_contact_radii() const { return a_pair_; }
+  const std::vector<Vec3>& wall_forces() const { return f_wall_; }
+  const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
+  const std::vector<double>& wall_contact_radii() const { return a_wall_; }
+
  private:
   void compute_forces(double kick = 0);  ///< kick > 0: closing half kick of free particles too
   void move_walls(double dt);
@@ -110,6 +138,7 @@ class System {
   void install_pending();
   void prepare_reach();
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
+  std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 
 }  // namespace cohdem

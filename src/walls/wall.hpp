@@ -36,6 +36,7 @@ struct Wall {
 
   // Control along the normal (plane walls).
   WallControl control = WallControl::Prescribed;
+  double control_start = 0;  ///< s: the control acts from this time on (held still before)
   double target_force = 0;   ///< servo: compressive load to hold, N
   double servo_gain = 0;     ///< servo: m/(N s)
   double servo_vmax = INFINITY;  ///< servo: speed limit, m/s
