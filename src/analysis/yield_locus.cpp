@@ -15,7 +15,7 @@ std::string pa(double v) { return std::to_string(v) + " Pa"; }
 }  // namespace
 
 YieldLocusResult evaluate_yield_locus(ShearPoint pre, std::span<const ShearPoint> pts,
-                                      std::optional<double> bulk_density) {
+                                      std::optional<double> bulk_density, bool allow_preshear_above) {
   const std::size_t n = pts.size();
   if (n < 2)
     throw std::invalid_argument("yield locus: need at least 2 shear-to-failure points, got " +
@@ -88,9 +88,19 @@ YieldLocusResult evaluate_yield_locus(ShearPoint pre, std::span<const ShearPoint
     throw std::invalid_argument("yield locus: pre-shear normal stress must be > 0, got " + pa(A));
   const double tau_yl = m * A + c;
   double q = tau_yl * tau_yl - T * T;
+  // Pre-shear point above the locus: no circle through it is tangent to the locus. When the
+  // caller allows it (noisy DEM data of a nearly cohesionless sample, where the point lies on
+  // the locus up to scatter), take the limiting circle: the one tangent AT the pre-shear point
+  // to the line of slope tan(phi) through it (the locus moved up to meet P), centre
+  // A + T tan(phi), radius T / cos(phi).
+  double cc = c;  // intercept of the line the steady-state circle touches
   if (q < 0) {
     // Accept a point on the locus up to rounding; otherwise no tangent circle exists.
     if (tau_yl > 0 && std::abs(T) - tau_yl <= 1e-12 * tau_yl) {
+      q = 0;
+    } else if (allow_preshear_above && T > 0) {
+      out.preshear_above_locus = true;
+      cc = T - m * A;
       q = 0;
     } else {
       throw std::invalid_argument(
@@ -100,8 +110,8 @@ YieldLocusResult evaluate_yield_locus(ShearPoint pre, std::span<const ShearPoint
           "pre-shear value (steady state reached?) and the shear points.");
     }
   }
-  const double s = (A + c * sn * cs - cs * std::sqrt(q)) / (cs * cs);
-  const double r = s * sn + c * cs;
+  const double s = (A + cc * sn * cs - cs * std::sqrt(q)) / (cs * cs);
+  const double r = s * sn + cc * cs;
   out.sigma_1 = s + r;
   out.sigma_2 = s - r;
   out.sigma_tangent = s - r * sn;

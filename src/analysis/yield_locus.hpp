@@ -34,15 +34,21 @@ struct YieldLocusResult {
   double phi_e = 0;        ///< effective angle of internal friction, rad
   double phi_sf = 0;       ///< steady-state-flow angle atan(tau_pre/sigma_pre), rad
   std::optional<double> bulk_density;  ///< kg/m^3, passed through when given
+  /// The pre-shear point lay above the locus and the limiting circle (tangent at the pre-shear
+  /// point to the locus moved up through it) was used (allow_preshear_above).
+  bool preshear_above_locus = false;
 };
 
 /// Evaluates one yield locus. Throws std::invalid_argument for fewer than 2 shear points,
 /// shear points all at the same sigma, a non-positive slope, a pre-shear point with
 /// sigma_pre <= 0, a pre-shear point above the linearized yield locus (no Mohr circle through
-/// it can be tangent to the locus), or a steady-state circle with sigma_2 < 0.
+/// it can be tangent to the locus; unless allow_preshear_above, which then takes the circle
+/// tangent at the pre-shear point to the line of the locus's slope through it), or a
+/// steady-state circle with sigma_2 < 0.
 YieldLocusResult evaluate_yield_locus(ShearPoint pre_shear,
                                       std::span<const ShearPoint> shear_points,
-                                      std::optional<double> bulk_density = std::nullopt);
+                                      std::optional<double> bulk_density = std::nullopt,
+                                      bool allow_preshear_above = false);
 
 /// Largest tau in the phase t_begin <= t <= t_end (shear to failure: the failure point).
 struct ShearPeak {

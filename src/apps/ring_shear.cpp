@@ -56,12 +56,16 @@ RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& mater
     if (!(f > 0 && f < 1)) s.fail("fractions", "each fraction of sigma_pre must be in (0, 1)");
   r.shear_velocity = s.num("shear_velocity", 0.02, 0, kInf, true, "m/s");
   r.servo_speed = s.num("servo_speed", 0.02, 0, kInf, true, "m/s");
+  r.lid_mass = s.num("lid_mass", 0.0, 0, kInf, false, "kg");
+  r.tau_window = s.num("tau_window", 0.0005, 0, kInf, false, "m");
   r.consolidate_time = s.num("consolidate_time", 0.05, 0, kInf, false, "s");
   r.first_preshear_distance = s.num("first_preshear_distance", 0.01, 0, kInf, true, "m");
   r.preshear_distance = s.num("preshear_distance", 0.005, 0, kInf, true, "m");
   r.shear_distance = s.num("shear_distance", 0.005, 0, kInf, true, "m");
   r.relax_time = s.num("relax_time", 0.01, 0, kInf, false, "s");
-  r.peak_drop = s.num("peak_drop", 0.03, 0, 1, true, "");
+  r.peak_drop = s.num("peak_drop", 0.1, 0, 1, true, "");
+  r.steady_drift = s.num("steady_drift", 0.1, 0, kInf, true, "");
+  r.preshear_max_factor = s.num("preshear_max_factor", 2.5, 1, kInf, false, "");
   r.sample_interval = s.num("sample_interval", 0.0, 0, kInf, false, "s");
   s.finish();
   return r;
@@ -154,7 +158,10 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   // Fill: insert loosely into a tall region, enough particles for the target bed height.
   const double layer = r.rough_layers ? 2 * rmax : 0.0;
   const double n_target = r.packing_guess * area * r.bed_height / r.size.mean_volume();
-  const double h_insert = r.bed_height * r.packing_guess / 0.2;  // loose: random insertion jams near 0.3
+  // Random insertion jams near 0.28 in a large region; the region's side walls lower that in
+  // narrow cells (under 10 diameters), which are filled looser.
+  const double narrow = box ? std::min(r.length, r.width) : r.r_outer - r.r_inner;
+  const double h_insert = r.bed_height * r.packing_guess / (narrow >= 20 * rmax ? 0.25 : 0.18);
   const double lid_park = layer + h_insert + 4 * rmax;  // lid out of the way while filling
   Wall lid;
   lid.name = "lid";
@@ -187,7 +194,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
       ins.region.zmax = layer + h_insert;
     }
     ins.region.name = "ring_shear fill";
-    ins.max_attempts = 5000;
+    ins.max_attempts = 20000;
     try {
       s.insert(ins);
     } catch (const RunError& e) {
@@ -255,11 +262,29 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     if (box) L->velocity = {v, 0, 0};
     else L->omega = {0, 0, v / r_mean};
   };
+  // The lid floats: a counterbalanced mass pressed down by the normal load (the dead weight of
+  // the lab tester), so the normal stress it applies is exact on average and the lid is free to
+  // dilate and compact; its motion follows the contact forces (WallControl::Spring, k = 0).
+  const double lid_mass = r.lid_mass > 0 ? r.lid_mass : free_mass;
   auto set_sigma = [&](double sig) {
+    L->control = WallControl::Spring;
+    L->mass = lid_mass;
+    L->spring_k = 0;
+    L->spring_preload = sig * area - lid_mass * dot(s.cfg.gravity, L->normal);  // weight counterbalanced
+  };
+  auto servo_approach = [&](double sig) {
     L->control = WallControl::Servo;
     L->target_force = sig * area;
-    L->servo_gain = r.servo_speed / (r.sigma_pre * area);
-    L->servo_vmax = r.servo_speed;
+    L->servo_gain = r.approach_speed / (r.sigma_pre * area);
+    L->servo_vmax = r.approach_speed;
+  };
+  // Averages of the last samples over tau_window of shear displacement.
+  const size_t win = std::max<size_t>(1, size_t(std::llround(r.tau_window / (r.shear_velocity * sample_every * c.cfg.dt))));
+  auto window_mean = [&](double Sample::*field) {
+    const size_t m = std::min(win, series.size());
+    double a = 0;
+    for (size_t q = series.size() - m; q < series.size(); ++q) a += series[q].*field;
+    return m ? a / double(m) : 0.0;
   };
 
   // --- Procedure ---------------------------------------------------------------------------
@@ -288,40 +313,49 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), full);
   else s.prepare();
   phase = 1;  // consolidation: approach fast until the lid carries 10% of the load, then servo
-  set_sigma(r.sigma_pre);
-  L->servo_vmax = r.approach_speed;
-  L->servo_gain = r.approach_speed / (r.sigma_pre * area);
+  servo_approach(r.sigma_pre);
   spdlog::debug("lid at z = {:.5g} m, bed top (95%) {:.5g} m, vn {:.3g}", L->point.z, top, L->vn);
   advance(1.0, [&] { return sigma_now() > 0.1 * r.sigma_pre; });
   set_sigma(r.sigma_pre);
   advance(r.consolidate_time);
+  if (c.output.vtk) write_state_vtk(s, out.string(), "consolidated", false);  // ParaView: particles_consolidated.vtu
 
   struct Point { double sigma, tau, tau_pre, sigma_pre_meas; };
   std::vector<Point> points;
-  std::vector<double> pre_tau, pre_sigma;
+  std::vector<double> pre_tau, pre_sigma, pre_dist;
+  // Pre-shear to steady state (ASTM D6773): shear `dist`, then go on in steps of dist/4 while
+  // tau over the last quarter of the pre-shear still drifts by more than steady_drift, up to
+  // preshear_max_factor x dist. The steady value is the mean over that last quarter.
   auto preshear = [&](double dist) {
     phase = 2;
     set_sigma(r.sigma_pre);
-    const double x0 = sheared;
     const size_t first = series.size();
     marks.push_back({sheared, "pre-shear"});
     set_shear(r.shear_velocity);
     advance(dist / r.shear_velocity);
+    double done = dist;
+    SteadyState st;
+    double sig_mean = 0;
+    for (;;) {
+      std::vector<double> t, tau, sig;
+      for (size_t q = first; q < series.size(); ++q) { t.push_back(series[q].t); tau.push_back(series[q].tau); sig.push_back(series[q].sigma); }
+      if (t.size() < 8) throw RunError("pre-shear too short to sample: raise preshear_distance or lower sample_interval");
+      st = steady_state_value(t, tau, t.front(), t.back(), 0.25, r.steady_drift);
+      sig_mean = 0;
+      size_t ns = 0;
+      for (size_t q = t.size() * 3 / 4; q < t.size(); ++q) { sig_mean += sig[q]; ++ns; }
+      sig_mean /= double(ns);
+      if (st.steady || done >= r.preshear_max_factor * dist * (1 - 1e-9)) break;
+      advance(0.25 * dist / r.shear_velocity);
+      done += 0.25 * dist;
+    }
     set_shear(0);
-    // Steady value: mean over the last quarter of the pre-shear.
-    std::vector<double> t, tau, sig;
-    for (size_t q = first; q < series.size(); ++q) { t.push_back(series[q].t); tau.push_back(series[q].tau); sig.push_back(series[q].sigma); }
-    if (t.size() < 8) throw RunError("pre-shear too short to sample: raise preshear_distance or lower sample_interval");
-    const SteadyState st = steady_state_value(t, tau, t.front(), t.back(), 0.25, 0.05);
-    double sm = 0;
-    size_t ns = 0;
-    for (size_t q = t.size() * 3 / 4; q < t.size(); ++q) { sm += sig[q]; ++ns; }
     pre_tau.push_back(st.mean);
-    pre_sigma.push_back(sm / ns);
+    pre_sigma.push_back(sig_mean);
+    pre_dist.push_back(done);
     if (!st.steady)
-      spdlog::warn("pre-shear {} not steady (relative drift {:.3f} over the last quarter): consider a longer preshear_distance",
-                   pre_tau.size(), st.relative_drift);
-    (void)x0;
+      spdlog::warn("pre-shear {} not steady after {:.3g} mm (relative drift {:.3f} over the last quarter, limit {:.3f})", pre_tau.size(),
+                   1e3 * done, st.relative_drift, r.steady_drift);
   };
   preshear(r.first_preshear_distance);
   for (double f : r.fractions) {
@@ -332,11 +366,15 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     phase = 4;
     marks.push_back({sheared, "shear " + std::to_string(int(std::lround(100 * f))) + "%"});
     set_shear(r.shear_velocity);
+    // Failure: the peak of tau averaged over tau_window (single samples of a small cell are
+    // noisy); the normal stress is averaged over the same window.
     double tau_max = 0, sig_at_max = 0;
+    const size_t first = series.size();
     advance(r.shear_distance / r.shear_velocity, [&] {
-      const Sample& q = series.back();
-      if (q.tau > tau_max) { tau_max = q.tau; sig_at_max = q.sigma; }
-      return tau_max > 0 && q.tau < (1 - r.peak_drop) * tau_max;
+      if (series.size() - first < win) return false;
+      const double tm = window_mean(&Sample::tau);
+      if (tm > tau_max) { tau_max = tm; sig_at_max = window_mean(&Sample::sigma); }
+      return tau_max > 0 && tm < (1 - r.peak_drop) * tau_max;
     });
     set_shear(0);
     points.push_back({sig_at_max, tau_max, pre_tau.back(), pre_sigma.back()});
@@ -349,13 +387,22 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     preshear(r.preshear_distance);
   }
 
+  if (c.output.vtk) write_state_vtk(s, out.string(), "final", false);
+
   // --- Evaluation --------------------------------------------------------------------------
   double tp = 0, sp = 0;
   for (size_t q = 0; q < pre_tau.size(); ++q) { tp += pre_tau[q]; sp += pre_sigma[q]; }
   tp /= pre_tau.size();
   sp /= pre_sigma.size();
-  std::vector<ShearPoint> sp_pts;
-  for (const auto& p : points) sp_pts.push_back({p.sigma, p.tau});
+  // ASTM D6773 (and Schulze's evaluation): each shear point is normalized to the mean pre-shear
+  // stress, tau * tau_pre_mean / tau_pre_i with tau_pre_i the pre-shear just before it, so that
+  // the scatter of the pre-shears (and a sample that strengthens from one pre-shear to the
+  // next) does not scatter the yield locus. The raw points are evaluated and reported too.
+  std::vector<ShearPoint> sp_pts, raw_pts;
+  for (const auto& p : points) {
+    sp_pts.push_back({p.sigma, p.tau_pre > 0 ? p.tau * tp / p.tau_pre : p.tau});
+    raw_pts.push_back({p.sigma, p.tau});
+  }
   double mean_density = 0;
   {
     size_t n = 0;
@@ -368,8 +415,10 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   j["particles"] = n_free;
   j["rough_layer_particles"] = n_fixed;
   j["sigma_pre_target"] = r.sigma_pre;
-  j["pre_shear"] = {{"sigma", sp}, {"tau", tp}, {"tau_each", pre_tau}, {"sigma_each", pre_sigma}};
-  for (const auto& p : points) j["shear_points"].push_back({{"sigma", p.sigma}, {"tau", p.tau}});
+  j["pre_shear"] = {{"sigma", sp}, {"tau", tp}, {"tau_each", pre_tau}, {"sigma_each", pre_sigma}, {"distance_each", pre_dist}};
+  for (size_t q = 0; q < points.size(); ++q)
+    j["shear_points"].push_back({{"sigma", points[q].sigma}, {"tau", sp_pts[q].tau}, {"tau_measured", points[q].tau},
+                                 {"tau_preshear_before", points[q].tau_pre}});
   j["bulk_density_preshear"] = mean_density;
   const double d50 = 2 * std::cbrt(r.size.mean_volume() * 3 / (4 * M_PI));
   const double rho_p = c.materials[r.material].density;
@@ -382,17 +431,28 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   bool evaluated = false;
   std::string eval_error;
   try {
-    yl = evaluate_yield_locus({sp, tp}, sp_pts, mean_density);
+    yl = evaluate_yield_locus({sp, tp}, sp_pts, mean_density, /*allow_preshear_above=*/true);
     evaluated = true;
   } catch (const std::invalid_argument& e) {
     eval_error = e.what();
   }
   const double deg = 180.0 / M_PI;
+  try {
+    const YieldLocusResult raw = evaluate_yield_locus({sp, tp}, raw_pts, mean_density, true);
+    j["yield_locus_raw"] = {{"phi_lin_deg", raw.phi_lin * deg}, {"cohesion", raw.cohesion}, {"sigma_c", raw.sigma_c},
+                            {"ffc", raw.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(raw.ffc)}};
+  } catch (const std::invalid_argument& e) {
+    j["yield_locus_raw"] = {{"error", e.what()}};
+  }
   if (evaluated) {
     j["yield_locus"] = {{"phi_lin_deg", yl.phi_lin * deg}, {"cohesion", yl.cohesion}, {"r_squared", yl.r_squared},
                         {"sigma_1", yl.sigma_1}, {"sigma_2", yl.sigma_2}, {"sigma_c", yl.sigma_c},
                         {"ffc", yl.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(yl.ffc)},
-                        {"phi_e_deg", yl.phi_e * deg}, {"phi_sf_deg", yl.phi_sf * deg}};
+                        {"phi_e_deg", yl.phi_e * deg}, {"phi_sf_deg", yl.phi_sf * deg},
+                        {"preshear_above_locus", yl.preshear_above_locus}};
+    if (yl.preshear_above_locus)
+      spdlog::warn("the pre-shear point lies above the linearized yield locus (scatter of a nearly cohesionless sample?): "
+                   "sigma_1 from the circle tangent at the pre-shear point");
   } else {
     j["yield_locus"] = {{"error", eval_error}};
   }
@@ -405,8 +465,9 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   {
     CsvWriter w(out / "series.csv", {"time", "shear_displacement", "sigma", "tau", "height", "bulk_density", "phase"});
     for (const auto& q : series) w.row({q.t, q.x, q.sigma, q.tau, q.height, q.density, double(q.phase)});
-    CsvWriter p(out / "shear_points.csv", {"sigma", "tau", "sigma_pre", "tau_pre"});
-    for (const auto& q : points) p.row({q.sigma, q.tau, q.sigma_pre_meas, q.tau_pre});
+    CsvWriter p(out / "shear_points.csv", {"sigma", "tau", "tau_measured", "sigma_pre", "tau_pre"});
+    for (size_t q = 0; q < points.size(); ++q)
+      p.row({points[q].sigma, sp_pts[q].tau, points[q].tau, points[q].sigma_pre_meas, points[q].tau_pre});
   }
   // Plots.
   try {
@@ -429,7 +490,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     b.ylabel = "shear stress tau (kPa)";
     b.equal_axes = true;
     Series pts{"shear points", {}, {}, "points"}, pre{"pre-shear", {1e-3 * sp}, {1e-3 * tp}, "points"};
-    for (const auto& q : points) { pts.x.push_back(1e-3 * q.sigma); pts.y.push_back(1e-3 * q.tau); }
+    for (const auto& q : sp_pts) { pts.x.push_back(1e-3 * q.sigma); pts.y.push_back(1e-3 * q.tau); }
     b.series = {pts, pre};
     if (evaluated) {
       const double smax = std::max(yl.sigma_1, sp) * 1.1;
@@ -446,7 +507,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   fmt::print("\nring shear test ({}, {} particles, sigma_pre = {:.4g} kPa)\n", r.cell, n_free, 1e-3 * r.sigma_pre);
   fmt::print("  pre-shear (steady state): sigma = {:.4g} kPa, tau = {:.4g} kPa\n", 1e-3 * sp, 1e-3 * tp);
   for (size_t q = 0; q < points.size(); ++q)
-    fmt::print("  shear point {}: sigma = {:.4g} kPa, tau = {:.4g} kPa\n", q + 1, 1e-3 * points[q].sigma, 1e-3 * points[q].tau);
+    fmt::print("  shear point {}: sigma = {:.4g} kPa, tau = {:.4g} kPa (measured {:.4g} kPa after a pre-shear at {:.4g} kPa)\n", q + 1,
+               1e-3 * points[q].sigma, 1e-3 * sp_pts[q].tau, 1e-3 * points[q].tau, 1e-3 * points[q].tau_pre);
   if (evaluated) {
     fmt::print("  angle of internal friction (linearized yield locus) phi_lin = {:.2f} deg\n", yl.phi_lin * deg);
     fmt::print("  cohesion c = {:.4g} kPa, unconfined yield strength sigma_c = {:.4g} kPa\n", 1e-3 * yl.cohesion, 1e-3 * yl.sigma_c);

@@ -28,13 +28,17 @@ struct RingShearSpec {
   double sigma_pre = 0;             ///< consolidation (pre-shear) normal stress, Pa
   std::vector<double> fractions{0.2, 0.4, 0.6, 0.8};  ///< shear points, fractions of sigma_pre
   double shear_velocity = 0.02;     ///< lid speed (annulus: at the mean radius), m/s
-  double servo_speed = 0.02;        ///< lid speed for a load error of sigma_pre x area, m/s
+  double servo_speed = 0.02;        ///< approach: lid speed for a load error of sigma_pre x area, m/s
+  double lid_mass = 0;              ///< kg of the floating lid (0: the sample's mass)
+  double tau_window = 0.0005;       ///< m of shear displacement over which tau is averaged
   double consolidate_time = 0.05;   ///< s under sigma_pre before the first pre-shear
   double first_preshear_distance = 0.01;  ///< m of shear to reach steady state the first time
   double preshear_distance = 0.005; ///< m of each later pre-shear
   double shear_distance = 0.005;    ///< m, longest shear to failure
+  double steady_drift = 0.1;        ///< pre-shear steady: relative drift of tau over its last quarter
+  double preshear_max_factor = 2.5; ///< a pre-shear goes on up to this many times its distance
   double relax_time = 0.01;         ///< s at rest after changing the normal stress
-  double peak_drop = 0.03;          ///< failure: tau fell this fraction below its maximum
+  double peak_drop = 0.1;           ///< failure: averaged tau fell this fraction below its maximum
   double sample_interval = 0;       ///< s between series rows (0: 200 steps)
   int line = 0;                     ///< of [ring_shear], for errors
 };

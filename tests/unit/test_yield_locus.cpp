@@ -123,6 +123,25 @@ TEST(YieldLocus, NormalEquations) {
   EXPECT_NEAR(res.cohesion, 2600.0 / 3.0, 1e-9);
 }
 
+// Pre-shear point above the locus, allowed: the steady-state circle touches the line of slope
+// tan(phi) through P = (A, T) at P itself. Its centre lies on the normal to that line through
+// P: s = A + T tan(phi), radius r = T / cos(phi), so sigma_1 = A + T tan(phi) + T / cos(phi).
+// Locus tan30 sigma + 2000; P = (20000, 14000): s = 20000 + 14000 tan30 = 28082.90 Pa,
+// r = 14000 / cos30 = 16165.81 Pa, sigma_1 = 44248.71 Pa, sigma_2 = 11917.09 Pa.
+TEST(YieldLocus, PreShearAboveLocusAllowed) {
+  const auto good = on_line(kTan30, 2000, {4000, 8000});
+  const YieldLocusResult r = evaluate_yield_locus({20000, 14000}, good, std::nullopt, true);
+  EXPECT_TRUE(r.preshear_above_locus);
+  const double s = 20000 + 14000 * kTan30, rad = 14000 / std::cos(std::atan(kTan30));
+  EXPECT_NEAR(r.sigma_1, s + rad, 1e-9 * (s + rad));
+  EXPECT_NEAR(r.sigma_2, s - rad, 1e-9 * (s + rad));
+  EXPECT_NEAR(r.sigma_1, 44248.71, 0.01);
+  // The unconfined circle still uses the fitted locus (c = 2000).
+  EXPECT_NEAR(r.cohesion, 2000, 1e-9);
+  // A point below the locus is not affected by the flag.
+  EXPECT_FALSE(evaluate_yield_locus({20000, 11000}, good, std::nullopt, true).preshear_above_locus);
+}
+
 TEST(YieldLocus, Errors) {
   const auto good = on_line(kTan30, 2000, {4000, 8000});
   EXPECT_THROW(evaluate_yield_locus({20000, 11000}, on_line(kTan30, 2000, {4000})),
