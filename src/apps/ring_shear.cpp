@@ -55,7 +55,6 @@ RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& mater
   for (double f : r.fractions)
     if (!(f > 0 && f < 1)) s.fail("fractions", "each fraction of sigma_pre must be in (0, 1)");
   r.shear_velocity = s.num("shear_velocity", 0.02, 0, kInf, true, "m/s");
-  r.servo_speed = s.num("servo_speed", 0.02, 0, kInf, true, "m/s");
   r.lid_mass = s.num("lid_mass", 0.0, 0, kInf, false, "kg");
   r.tau_window = s.num("tau_window", 0.0005, 0, kInf, false, "m");
   r.consolidate_time = s.num("consolidate_time", 0.05, 0, kInf, false, "s");

@@ -28,7 +28,6 @@ struct RingShearSpec {
   double sigma_pre = 0;             ///< consolidation (pre-shear) normal stress, Pa
   std::vector<double> fractions{0.2, 0.4, 0.6, 0.8};  ///< shear points, fractions of sigma_pre
   double shear_velocity = 0.02;     ///< lid speed (annulus: at the mean radius), m/s
-  double servo_speed = 0.02;        ///< approach: lid speed for a load error of sigma_pre x area, m/s
   double lid_mass = 0;              ///< kg of the floating lid (0: the sample's mass)
   double tau_window = 0.0005;       ///< m of shear displacement over which tau is averaged
   double consolidate_time = 0.05;   ///< s under sigma_pre before the first pre-shear
