@@ -20,9 +20,6 @@ struct ForceContext {
   std::vector<Vec3>& c_wall;
   /// Body-force acceleration added to every free particle after its contact forces, m/s^2.
   Vec3 gravity{};
-  /// When > 0, each free particle, once its force and torque are final, gets the closing
-  /// half kick of velocity Verlet: v += F kick/m, omega += T kick/I (saves a pass over memory).
-  double kick = 0;
 };
 
 }  // namespace cohdem

@@ -6,8 +6,7 @@
 //   and the torque on j) goes to j's slot of the transposed buffers (nl.in_f, nl.in_tj;
 //   zero while a pair is not live).
 // Pass 2 (particle i): adds its slots in the transposed order (contiguous, no live test),
-//   then i's wall contacts, then the body force; then, in a time step, the closing half
-//   kick of i's velocity (ForceContext::kick).
+//   then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. One parallel region: each thread runs pass 1 over a contiguous block of particles
 // and pass 2 of each particle as soon as the rows it depends on are done (while the pair
@@ -46,8 +45,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
   const Vec3* const __restrict x = P.x.data();
-  Vec3* const __restrict v = P.v.data();
-  Vec3* const __restrict omega = P.omega.data();
+  const Vec3* const __restrict v = P.v.data();
+  const Vec3* const __restrict omega = P.omega.data();
   const double* const __restrict radius = P.radius.data();
   const double* const __restrict mass = P.mass.data();
   const double* const __restrict inertia = P.inertia.data();
@@ -64,7 +63,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
-  const double kick = c.kick;
 
   // Pass 1 of row i.
   auto row = [&](const long i) __attribute__((always_inline)) {
@@ -182,11 +180,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (flag[i] == kFree) F += grav * mass[i];
     force[i] = F;
     torque[i] = T;
-    // No row reads i's velocity after this point (all rows holding i are done).
-    if (kick > 0 && flag[i] == kFree) {
-      v[i] += F * (kick / mass[i]);
-      omega[i] += T * (kick / inertia[i]);
-    }
   };
 
   // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2

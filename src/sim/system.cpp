@@ -196,11 +196,11 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick) {
+void System::compute_forces() {
   const size_t nw = nl.wall_entry_count();
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   // Gravity is added by the kernel, after the contact forces of each free particle.
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_wall_, tw_wall_, c_wall_, cfg.gravity, kick};
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   model->compute(ctx);
 
   // Wall totals in a fixed order (deterministic).
@@ -252,7 +252,14 @@ void System::step_once() {
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
-  compute_forces(h);  // forces, then the closing half kick of every free particle
+  compute_forces();
+  const long n2 = long(P.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n2; ++i) {
+    if (P.flag[i] != kFree) continue;
+    P.v[i] += P.force[i] * (h / P.mass[i]);
+    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+  }
   control_walls(dt);
 }
 

@@ -95,7 +95,7 @@ class System {
   double rebuild_count() const { return double(nl.stats.builds); }
 
  private:
-  void compute_forces(double kick = 0);  ///< kick > 0: closing half kick of free particles too
+  void compute_forces();
   void move_walls(double dt);
   void control_walls(double dt);
   void do_pours();
