@@ -211,11 +211,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
       dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
     }
-  dep_lag = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t lag = dep_hi[i] - uint32_t(i);
-    if (lag <= kMaxLag) dep_lag = std::max(dep_lag, lag);
-  }
   in_f.assign(np, Vec3{});
   in_tj.assign(np, Vec3{});
 

@@ -62,10 +62,6 @@ class NeighborList {
   /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
   /// kernel finishes a particle once rows dep_lo..dep_hi are done.
   std::vector<uint32_t> dep_lo, dep_hi;
-  /// Largest dep_hi[p] - p, capped at kMaxLag: the kernel finishes particle i - dep_lag after
-  /// row i; particles further behind wait for the barrier.
-  uint32_t dep_lag = 0;
-  static constexpr uint32_t kMaxLag = 8192;
   HistoryArray hist;
 
   // Wall candidates (CSR by particle).

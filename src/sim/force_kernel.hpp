@@ -193,23 +193,19 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const long a = n * tid / nt, b = n * (tid + 1) / nt;
-    // Particle p is finished right after row p + lag: every row it depends on is done then
-    // (dep_hi[p] - p <= lag). Particles depending on rows of other blocks, or further behind
-    // than the lag, are finished after the barrier.
-    const long lag = long(nl.dep_lag);
-    auto in_block = [&](const long q) {
-      return long(dep_lo[q]) >= a && long(dep_hi[q]) < b && long(dep_hi[q]) - q <= lag;
-    };
+    // next: the first particle of the block not yet finished or skipped. A particle that
+    // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
+    // block; those, and the ones depending on earlier blocks, are finished after the barrier.
+    long next = a;
     for (long i = a; i < b; ++i) {
       row(i);
-      const long q = i - lag;
-      if (q >= a && in_block(q)) finish(q);
+      for (; next <= i && long(dep_hi[next]) <= i; ++next)
+        if (long(dep_lo[next]) >= a) finish(next);
     }
-    for (long q = std::max(a, b - lag); q < b; ++q)
-      if (in_block(q)) finish(q);
 #pragma omp barrier
-    for (long q = a; q < b; ++q)
-      if (!in_block(q)) finish(q);
+    for (long q = a; q < next; ++q)
+      if (long(dep_lo[q]) < a) finish(q);
+    for (long q = next; q < b; ++q) finish(q);
   }
 }
 
