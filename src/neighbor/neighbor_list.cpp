@@ -322,27 +322,6 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
   return false;
 }
 
-bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
-                                 double dmax2_free) const {
-  if (x_ref_.size() != p.size()) return true;
-  const long n = long(p.size());
-  double dmax2 = dmax2_free, grow = 0;
-  const uint8_t* flag = p.flag.data();
-  const Vec3* x = p.x.data();
-  const double *r = p.radius.data(), *r0 = r_ref_.data();
-#pragma omp parallel for reduction(max : dmax2, grow) schedule(static)
-  for (long i = 0; i < n; ++i) {
-    if (flag[i] == kFrozen) continue;
-    if (flag[i] == kAttached) dmax2 = std::max(dmax2, norm2(x[i] - x_ref_[i]));
-    grow = std::max(grow, r[i] - r0[i]);
-  }
-  const double dmax = std::sqrt(dmax2) + grow;
-  if (2 * dmax > skin) return true;
-  for (size_t w = 0; w < walls.size(); ++w)
-    if (dmax + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
-  return false;
-}
-
 size_t NeighborList::live_contacts() const {
   size_t c = 0;
   for (uint8_t l : hist.live) c += l;

@@ -80,13 +80,6 @@ class NeighborList {
 
   /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
   bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
-  /// The same decision when the caller already knows the largest squared displacement of the
-  /// FREE particles since the last build (the step loop measures it while moving them):
-  /// scans only attached particles and radius growth.
-  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
-                     double dmax2_free) const;
-  /// Positions at the last build, or nullptr when the list was built for another count.
-  const Vec3* reference_positions(size_t n) const { return x_ref_.size() == n ? x_ref_.data() : nullptr; }
 
   size_t pair_count() const { return jdx.size(); }
   size_t wall_entry_count() const { return wall.size(); }

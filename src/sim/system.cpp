@@ -227,17 +227,12 @@ void System::step_once() {
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
-  // Half kick and drift; the same pass measures how far free particles moved since the last
-  // neighbor build (the rebuild test below then skips them).
-  const Vec3* xr = nl.reference_positions(P.size());
-  double dmax2 = 0;
-#pragma omp parallel for schedule(static) reduction(max : dmax2)
+#pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
     if (P.flag[i] != kFree) continue;
     P.v[i] += P.force[i] * (h / P.mass[i]);
     P.omega[i] += P.torque[i] * (h / P.inertia[i]);
     P.x[i] += P.v[i] * dt;
-    if (xr) dmax2 = std::max(dmax2, norm2(P.x[i] - xr[i]));
   }
   move_walls(dt);
   time += dt;
@@ -247,7 +242,7 @@ void System::step_once() {
     do_pours();
     if (P.size() != before) dirty_ = true;
   }
-  if (dirty_ || !xr || nl.needs_rebuild(P, walls, cfg.skin, dmax2)) {
+  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin)) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
