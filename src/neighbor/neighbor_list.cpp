@@ -199,7 +199,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   rstart.assign(n + 1, 0);
   for (uint32_t j : jdx) ++rstart[j + 1];
   for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
-  rslot.resize(np);
+  rpair.resize(np);
   dep_lo.resize(n);
   dep_hi.resize(n);
   fill_.assign(rstart.begin(), rstart.end() - 1);
@@ -207,12 +207,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   for (size_t i = 0; i < n; ++i)
     for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
       const uint32_t j = jdx[k];
-      rslot[k] = fill_[j]++;
+      rpair[fill_[j]++] = k;
       dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
       dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
     }
-  in_f.assign(np, Vec3{});
-  in_tj.assign(np, Vec3{});
 
   // 5. Wall candidates. Bounded walls are tested with their bounds widened by the largest
   //    cutoff, so an approaching particle is listed before it reaches an edge.

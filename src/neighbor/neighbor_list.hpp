@@ -54,11 +54,7 @@ class NeighborList {
   std::vector<uint32_t> jdx;     ///< partner j
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
-  std::vector<uint32_t> rslot;   ///< per pair k: its slot in the transposed order (j's rows)
-  /// What j receives from each pair, in the transposed order (slot rslot[k]): the force on i
-  /// (j takes its opposite) and the torque on j. Zero where the pair is not live: the force
-  /// kernel keeps it so, and build() zeroes them, so sums need no live test.
-  std::vector<Vec3> in_f, in_tj;
+  std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
   /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
   /// kernel finishes a particle once rows dep_lo..dep_hi are done.
   std::vector<uint32_t> dep_lo, dep_hi;

@@ -3,10 +3,9 @@
 // Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
 //   free screening), then evaluated; the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
-//   and the torque on j) goes to j's slot of the transposed buffers (nl.in_f, nl.in_tj;
-//   zero while a pair is not live).
-// Pass 2 (particle i): adds its slots in the transposed order (contiguous, no live test),
-//   then i's wall contacts, then the body force.
+//   and the torque on j) goes to per-pair buffers.
+// Pass 2 (particle i): adds the pair results where i is j, in the order of the transposed
+//   index, then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. One parallel region: each thread runs pass 1 over a contiguous block of particles
 // and pass 2 of each particle as soon as the rows it depends on are done (while the pair
@@ -40,7 +39,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t* const __restrict jdx = nl.jdx.data();
   const uint8_t* const __restrict image = nl.image.data();
   const uint32_t* const __restrict rstart = nl.rstart.data();
-  const uint32_t* const __restrict rslot = nl.rslot.data();
+  const uint32_t* const __restrict rpair = nl.rpair.data();
   const uint32_t* const __restrict wstart = nl.wstart.data();
   const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
@@ -54,8 +53,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const int32_t* const __restrict species = P.species.data();
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
-  Vec3* const __restrict in_f = nl.in_f.data();
-  Vec3* const __restrict in_tj = nl.in_tj.data();
+  Vec3* const __restrict f_pair = c.f_pair.data();
+  Vec3* const __restrict tj_pair = c.tj_pair.data();
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
   Vec3* const __restrict c_wall = c.c_wall.data();
@@ -121,15 +120,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       PairForce out;
       const bool alive = Law::evaluate(p(si, species[j]), g, hs[k], out);
       live[k] = alive;
-      const uint32_t q = rslot[k];
       if (alive) {
         F += out.f;
         T += out.ti;
-        in_f[q] = out.f;
-        in_tj[q] = out.tj;
-      } else {
-        in_f[q] = Vec3{};
-        in_tj[q] = Vec3{};
+        f_pair[k] = out.f;
+        tj_pair[k] = out.tj;
       }
       }
     }
@@ -139,9 +134,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
   auto finish = [&](const long i) __attribute__((always_inline)) {
     Vec3 F = force[i], T = torque[i];
-    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {  // zero where not live
-      F -= in_f[q];
-      T += in_tj[q];
+    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
+      const uint32_t k = rpair[q];
+      if (live[k]) { F -= f_pair[k]; T += tj_pair[k]; }
     }
     for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
       const Wall& w = walls[wall_of[e]];

@@ -106,7 +106,7 @@ class System {
   bool has_pending_ = false;
   void install_pending();
   void prepare_reach();
-  std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
+  std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
 };
 
 }  // namespace cohdem
