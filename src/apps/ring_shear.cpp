@@ -228,7 +228,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   std::vector<Sample> series;
   std::vector<std::pair<double, std::string>> marks;
   double free_mass = 0;
-  for (size_t i = n_fixed; i < s.particles.size(); ++i) free_mass += s.particles.mass[i];
+  for (size_t i = 0; i < s.particles.size(); ++i)
+    if (s.particles.flag[i] == kFree) free_mass += s.particles.mass[i];
   auto sigma_now = [&] { return L->force.z / area; };
   auto tau_now = [&] {
     if (box) return std::fabs(L->force.x) / area;
@@ -293,7 +294,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   advance(std::min(t_fall, r.settle_time));
   while (s.time < r.settle_time) {
     double vmax = 0;
-    for (size_t i = n_fixed; i < s.particles.size(); ++i) vmax = std::max(vmax, norm(s.particles.v[i]));
+    for (size_t i = 0; i < s.particles.size(); ++i)  // free particles (indices change when the list re-sorts)
+      if (s.particles.flag[i] == kFree) vmax = std::max(vmax, norm(s.particles.v[i]));
     if (vmax < r.settle_velocity) break;
     advance(0.005);
   }
@@ -301,7 +303,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   // Lower the lid onto the bed (rigidly with its rough layer) just above the 95th percentile
   // of the particle tops (a few particles may still bounce), restore full adhesion.
   std::vector<double> tops;
-  for (size_t i = n_fixed; i < s.particles.size(); ++i) tops.push_back(s.particles.x[i].z + s.particles.radius[i]);
+  for (size_t i = 0; i < s.particles.size(); ++i)
+    if (s.particles.flag[i] == kFree) tops.push_back(s.particles.x[i].z + s.particles.radius[i]);
   std::sort(tops.begin(), tops.end());
   const double top = tops.empty() ? layer : tops[size_t(0.95 * double(tops.size() - 1))];
   const double drop = L->point.z - (top + layer + 0.5 * rmax);

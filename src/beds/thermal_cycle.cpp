@@ -95,7 +95,8 @@ int run_thermal_cycle(const BedOptions& o, const ThermalCycleOptions& t) {
   j["case"] = c.name;
   j["period"] = t.period;
   j["time_scale"] = s->thermal->settings().time_scale;
-  const int ncyc = int(std::floor((s->time - t.start) / t.period + 1e-6));  // time is a sum of steps
+  // Whole cycles run; the run ends within a step of start + k period (time is a sum of steps).
+  const int ncyc = int(std::floor((s->time + s->cfg.dt - t.start) / t.period + 1e-9));
   const Sample* before = nullptr;
   for (const Sample& q : samples)
     if (q.t <= t.start + 1e-12) before = &q;

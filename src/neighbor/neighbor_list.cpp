@@ -199,7 +199,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   rstart.assign(n + 1, 0);
   for (uint32_t j : jdx) ++rstart[j + 1];
   for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
-  rslot.resize(np);
+  rpair.resize(np);
   dep_lo.resize(n);
   dep_hi.resize(n);
   fill_.assign(rstart.begin(), rstart.end() - 1);
@@ -207,17 +207,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   for (size_t i = 0; i < n; ++i)
     for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
       const uint32_t j = jdx[k];
-      rslot[k] = fill_[j]++;
+      rpair[fill_[j]++] = k;
       dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
       dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
     }
-  dep_lag = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t lag = dep_hi[i] - uint32_t(i);
-    if (lag <= kMaxLag) dep_lag = std::max(dep_lag, lag);
-  }
-  in_f.assign(np, Vec3{});
-  in_tj.assign(np, Vec3{});
 
   // 5. Wall candidates. Bounded walls are tested with their bounds widened by the largest
   //    cutoff, so an approaching particle is listed before it reaches an edge.
@@ -319,27 +312,6 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
     if (p.flag[i] == kFrozen) continue;
     dmax2 = std::max(dmax2, norm2(p.x[i] - x_ref_[i]));
     grow = std::max(grow, p.radius[i] - r_ref_[i]);
-  }
-  const double dmax = std::sqrt(dmax2) + grow;
-  if (2 * dmax > skin) return true;
-  for (size_t w = 0; w < walls.size(); ++w)
-    if (dmax + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
-  return false;
-}
-
-bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
-                                 double dmax2_free) const {
-  if (x_ref_.size() != p.size()) return true;
-  const long n = long(p.size());
-  double dmax2 = dmax2_free, grow = 0;
-  const uint8_t* flag = p.flag.data();
-  const Vec3* x = p.x.data();
-  const double *r = p.radius.data(), *r0 = r_ref_.data();
-#pragma omp parallel for reduction(max : dmax2, grow) schedule(static) if (n > parallel_min)
-  for (long i = 0; i < n; ++i) {
-    if (flag[i] == kFrozen) continue;
-    if (flag[i] == kAttached) dmax2 = std::max(dmax2, norm2(x[i] - x_ref_[i]));
-    grow = std::max(grow, r[i] - r0[i]);
   }
   const double dmax = std::sqrt(dmax2) + grow;
   if (2 * dmax > skin) return true;

@@ -54,18 +54,10 @@ class NeighborList {
   std::vector<uint32_t> jdx;     ///< partner j
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
-  std::vector<uint32_t> rslot;   ///< per pair k: its slot in the transposed order (j's rows)
-  /// What j receives from each pair, in the transposed order (slot rslot[k]): the force on i
-  /// (j takes its opposite) and the torque on j. Zero where the pair is not live: the force
-  /// kernel keeps it so, and build() zeroes them, so sums need no live test.
-  std::vector<Vec3> in_f, in_tj;
+  std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
   /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
   /// kernel finishes a particle once rows dep_lo..dep_hi are done.
   std::vector<uint32_t> dep_lo, dep_hi;
-  /// Largest dep_hi[p] - p, capped at kMaxLag: the kernel finishes particle i - dep_lag after
-  /// row i; particles further behind wait for the barrier.
-  uint32_t dep_lag = 0;
-  static constexpr uint32_t kMaxLag = 8192;
   HistoryArray hist;
 
   // Wall candidates (CSR by particle).
@@ -85,13 +77,6 @@ class NeighborList {
 
   /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
   bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
-  /// The same decision when the caller already knows the largest squared displacement of the
-  /// FREE particles since the last build (the step loop measures it while moving them):
-  /// scans only attached particles and radius growth.
-  bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin,
-                     double dmax2_free) const;
-  /// Positions at the last build, or nullptr when the list was built for another count.
-  const Vec3* reference_positions(size_t n) const { return x_ref_.size() == n ? x_ref_.data() : nullptr; }
 
   size_t pair_count() const { return jdx.size(); }
   size_t wall_entry_count() const { return wall.size(); }

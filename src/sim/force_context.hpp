@@ -13,6 +13,12 @@ struct ForceContext {
   NeighborList& nl;
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
+  // Per-pair results, valid where nl.hist.live[k]: the force on i (j gets its opposite) and
+  // the torque on j; the kernel sums i's side directly (ti_pair is kept for callers that
+  // want it but is not written by the bulk kernel).
+  std::vector<Vec3>& f_pair;
+  std::vector<Vec3>& ti_pair;
+  std::vector<Vec3>& tj_pair;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
   std::vector<Vec3>& f_wall;
@@ -20,9 +26,6 @@ struct ForceContext {
   std::vector<Vec3>& c_wall;
   /// Body-force acceleration added to every free particle after its contact forces, m/s^2.
   Vec3 gravity{};
-  /// When > 0, each free particle, once its force and torque are final, gets the closing
-  /// half kick of velocity Verlet: v += F kick/m, omega += T kick/I (saves a pass over memory).
-  double kick = 0;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null

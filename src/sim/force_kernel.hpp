@@ -3,11 +3,9 @@
 // Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
 //   free screening), then evaluated; the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
-//   and the torque on j) goes to j's slot of the transposed buffers (nl.in_f, nl.in_tj;
-//   zero while a pair is not live).
-// Pass 2 (particle i): adds its slots in the transposed order (contiguous, no live test),
-//   then i's wall contacts, then the body force; then, in a time step, the closing half
-//   kick of i's velocity (ForceContext::kick).
+//   and the torque on j) goes to per-pair buffers.
+// Pass 2 (particle i): adds the pair results where i is j, in the order of the transposed
+//   index, then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. One parallel region: each thread runs pass 1 over a contiguous block of particles
 // and pass 2 of each particle as soon as the rows it depends on are done (while the pair
@@ -41,13 +39,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t* const __restrict jdx = nl.jdx.data();
   const uint8_t* const __restrict image = nl.image.data();
   const uint32_t* const __restrict rstart = nl.rstart.data();
-  const uint32_t* const __restrict rslot = nl.rslot.data();
+  const uint32_t* const __restrict rpair = nl.rpair.data();
   const uint32_t* const __restrict wstart = nl.wstart.data();
   const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
   const Vec3* const __restrict x = P.x.data();
-  Vec3* const __restrict v = P.v.data();
-  Vec3* const __restrict omega = P.omega.data();
+  const Vec3* const __restrict v = P.v.data();
+  const Vec3* const __restrict omega = P.omega.data();
   const double* const __restrict radius = P.radius.data();
   const double* const __restrict mass = P.mass.data();
   const double* const __restrict inertia = P.inertia.data();
@@ -55,8 +53,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const int32_t* const __restrict species = P.species.data();
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
-  Vec3* const __restrict in_f = nl.in_f.data();
-  Vec3* const __restrict in_tj = nl.in_tj.data();
+  Vec3* const __restrict f_pair = c.f_pair.data();
+  Vec3* const __restrict tj_pair = c.tj_pair.data();
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
   Vec3* const __restrict c_wall = c.c_wall.data();
@@ -64,7 +62,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
-  const double kick = c.kick;
 
   // Pass 1 of row i.
   auto row = [&](const long i) __attribute__((always_inline)) {
@@ -123,16 +120,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       PairForce out;
       const bool alive = Law::evaluate(p(si, species[j]), g, hs[k], out);
       live[k] = alive;
-      const uint32_t q = rslot[k];
       if (alive) {
         F += out.f;
         T += out.ti;
-        in_f[q] = out.f;
-        in_tj[q] = out.tj;
+        f_pair[k] = out.f;
+        tj_pair[k] = out.tj;
         if (c.a_pair) c.a_pair[k] = out.a;
-      } else {
-        in_f[q] = Vec3{};
-        in_tj[q] = Vec3{};
       }
       }
     }
@@ -142,9 +135,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
   auto finish = [&](const long i) __attribute__((always_inline)) {
     Vec3 F = force[i], T = torque[i];
-    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {  // zero where not live
-      F -= in_f[q];
-      T += in_tj[q];
+    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
+      const uint32_t k = rpair[q];
+      if (live[k]) { F -= f_pair[k]; T += tj_pair[k]; }
     }
     for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
       const Wall& w = walls[wall_of[e]];
@@ -184,11 +177,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (flag[i] == kFree) F += grav * mass[i];
     force[i] = F;
     torque[i] = T;
-    // No row reads i's velocity after this point (all rows holding i are done).
-    if (kick > 0 && flag[i] == kFree) {
-      v[i] += F * (kick / mass[i]);
-      omega[i] += T * (kick / inertia[i]);
-    }
   };
 
   // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2
@@ -202,23 +190,19 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const long a = n * tid / nt, b = n * (tid + 1) / nt;
-    // Particle p is finished right after row p + lag: every row it depends on is done then
-    // (dep_hi[p] - p <= lag). Particles depending on rows of other blocks, or further behind
-    // than the lag, are finished after the barrier.
-    const long lag = long(nl.dep_lag);
-    auto in_block = [&](const long q) {
-      return long(dep_lo[q]) >= a && long(dep_hi[q]) < b && long(dep_hi[q]) - q <= lag;
-    };
+    // next: the first particle of the block not yet finished or skipped. A particle that
+    // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
+    // block; those, and the ones depending on earlier blocks, are finished after the barrier.
+    long next = a;
     for (long i = a; i < b; ++i) {
       row(i);
-      const long q = i - lag;
-      if (q >= a && in_block(q)) finish(q);
+      for (; next <= i && long(dep_hi[next]) <= i; ++next)
+        if (long(dep_lo[next]) >= a) finish(next);
     }
-    for (long q = std::max(a, b - lag); q < b; ++q)
-      if (in_block(q)) finish(q);
 #pragma omp barrier
-    for (long q = a; q < b; ++q)
-      if (!in_block(q)) finish(q);
+    for (long q = a; q < next; ++q)
+      if (long(dep_lo[q]) < a) finish(q);
+    for (long q = next; q < b; ++q) finish(q);
   }
 }
 

@@ -64,9 +64,7 @@ void System::remove_particles(const std::vector<uint8_t>& remove) {
     nl.wall = std::move(wall);
     nl.whist = std::move(whist);
     nl.rstart.clear();
-    nl.rslot.clear();
-    nl.in_f.clear();
-    nl.in_tj.clear();
+    nl.rpair.clear();
   }
   particles.erase_if_flagged(remove);
   dirty_ = true;

@@ -199,8 +199,9 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick) {
-  const size_t nw = nl.wall_entry_count();
+void System::compute_forces() {
+  const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
+  if (f_pair_.size() < np) { f_pair_.resize(np); tj_pair_.resize(np); }  // ti_pair_: unused by the kernel
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   const bool radii = thermal || cfg.record_contact_radii;
   if (radii) {
@@ -208,7 +209,8 @@ void System::compute_forces(double kick) {
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_wall_, tw_wall_, c_wall_, cfg.gravity, kick, cfg.parallel_min};
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
+  ctx.parallel_min = cfg.parallel_min;
   ctx.a_pair = radii ? a_pair_.data() : nullptr;
   ctx.a_wall = radii ? a_wall_.data() : nullptr;
   model->compute(ctx);
@@ -237,17 +239,12 @@ void System::step_once() {
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
-  // Half kick and drift; the same pass measures how far free particles moved since the last
-  // neighbor build (the rebuild test below then skips them).
-  const Vec3* xr = nl.reference_positions(P.size());
-  double dmax2 = 0;
-#pragma omp parallel for schedule(static) reduction(max : dmax2) if (n > cfg.parallel_min)
+#pragma omp parallel for schedule(static) if (n > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
     if (P.flag[i] != kFree) continue;
     P.v[i] += P.force[i] * (h / P.mass[i]);
     P.omega[i] += P.torque[i] * (h / P.inertia[i]);
     P.x[i] += P.v[i] * dt;
-    if (xr) dmax2 = std::max(dmax2, norm2(P.x[i] - xr[i]));
   }
   move_walls(dt);
   time += dt;
@@ -258,13 +255,20 @@ void System::step_once() {
     if (P.size() != before) dirty_ = true;
   }
   nl.parallel_min = cfg.parallel_min;
-  if (dirty_ || !xr || nl.needs_rebuild(P, walls, cfg.skin, dmax2)) {
+  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin)) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
-  compute_forces(h);  // forces, then the closing half kick of every free particle
-  if (thermal) thermal->update(*this, true);  // heat flow, temperatures, radii
+  compute_forces();
+  if (thermal) thermal->update(*this, true);  // heat flow, temperatures, radii (and inertia)
+  const long n2 = long(P.size());
+#pragma omp parallel for schedule(static) if (n2 > cfg.parallel_min)
+  for (long i = 0; i < n2; ++i) {
+    if (P.flag[i] != kFree) continue;
+    P.v[i] += P.force[i] * (h / P.mass[i]);
+    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+  }
   control_walls(dt);
 }
 

@@ -118,15 +118,15 @@ class System {
   // Per-contact results of the last force pass, indexed like nl.jdx (pairs) and nl.wall (wall
   // entries); valid where nl.hist.live / nl.whist.live. Forces act on the particle (pair: on i).
   // Contact radii are recorded only with a thermal model or SimConfig::record_contact_radii.
-  /// Force on i of pair entry k (zero when not live); kept by the kernel in j's transposed slot.
-  Vec3 pair_force(size_t k) const { return nl.in_f[nl.rslot[k]]; }
+  /// Force on i of pair entry k (zero when not live).
+  Vec3 pair_force(size_t k) const { return nl.hist.live[k] ? f_pair_[k] : Vec3{}; }
   const std::vector<double>& pair_contact_radii() const { return a_pair_; }
   const std::vector<Vec3>& wall_forces() const { return f_wall_; }
   const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
   const std::vector<double>& wall_contact_radii() const { return a_wall_; }
 
  private:
-  void compute_forces(double kick = 0);  ///< kick > 0: closing half kick of free particles too
+  void compute_forces();
   void move_walls(double dt);
   void control_walls(double dt);
   void do_pours();
@@ -137,7 +137,7 @@ class System {
   bool has_pending_ = false;
   void install_pending();
   void prepare_reach();
-  std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
+  std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
   std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 

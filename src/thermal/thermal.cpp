@@ -75,8 +75,6 @@ void ThermalModel::update(System& s, bool integrate) {
   h_pair.assign(np, 0.0);
   h_wall.assign(nw, 0.0);
   q_pair_.assign(np, 0.0);
-  q_in_.assign(np, 0.0);  // transposed order (slot nl.rslot[k]), as the force kernel's in_f
-  h_in_.assign(np, 0.0);
   q_wall_.assign(nw, 0.0);
   const double t = s.time;
   tw_.assign(s.walls.size(), NAN);
@@ -113,8 +111,6 @@ void ThermalModel::update(System& s, bool integrate) {
       const double h = hk_[pm] * a;
       h_pair[k] = h;
       q_pair_[k] = h * (P.temperature[j] - P.temperature[i]);
-      q_in_[nl.rslot[k]] = q_pair_[k];
-      h_in_[nl.rslot[k]] = h;
     }
   }
 
@@ -127,9 +123,9 @@ void ThermalModel::update(System& s, bool integrate) {
     double Q = 0, H = 0;
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
       if (live[k]) { Q += q_pair_[k]; H += h_pair[k]; }
-    for (uint32_t q = nl.rstart[i]; q < nl.rstart[i + 1]; ++q) {  // zero where not live
-      Q -= q_in_[q];
-      H += h_in_[q];
+    for (uint32_t q = nl.rstart[i]; q < nl.rstart[i + 1]; ++q) {
+      const uint32_t k = nl.rpair[q];
+      if (live[k]) { Q -= q_pair_[k]; H += h_pair[k]; }
     }
     for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
       const uint16_t w = nl.wall[e];

@@ -91,7 +91,7 @@ class ThermalModel {
   std::vector<double> cp_, alpha_, tref_;
   // Scratch reused every step: heat flow into the particle per pair / wall entry (W), wall
   // temperatures and source powers now.
-  std::vector<double> q_pair_, q_in_, h_in_, q_wall_, tw_, src_;
+  std::vector<double> q_pair_, q_wall_, tw_, src_;
 };
 
 /// Energy check helper: sum of m c T over particles, J (heat capacities unscaled).

@@ -7,9 +7,9 @@ set -u
 bin=$1; src=$2
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 args="--set insert.0.count=200 --set output.frame_interval=0.001 --quiet"
-"$bin" run $args --set simulation.duration=0.002 --out "$work/o" > /dev/null 2>&1 || { echo "FAIL first run"; exit 1; }
+"$bin" run "$src/examples/box_pour.toml" $args --set simulation.duration=0.002 --out "$work/o" > /dev/null 2>&1 || { echo "FAIL first run"; exit 1; }
 rows1=$(($(wc -l < "$work/o/series.csv") - 1))
-"$bin" run $args --set simulation.duration=0.004 --out "$work/o" --resume "$work/o/checkpoint.bin" > "$work/log" 2>&1 || { echo "FAIL resume"; cat "$work/log"; exit 1; }
+"$bin" run "$src/examples/box_pour.toml" $args --set simulation.duration=0.004 --out "$work/o" --resume "$work/o/checkpoint.bin" > "$work/log" 2>&1 || { echo "FAIL resume"; cat "$work/log"; exit 1; }
 python3 - "$work/o" "$rows1" <<'PY'
 import csv, sys, re
 out, rows1 = sys.argv[1], int(sys.argv[2])

@@ -62,7 +62,7 @@ void check(bool periodic, bool resort) {
     }
   EXPECT_EQ(seen.size(), ref.size()) << "pairs within the cutoff missing from the list";
   // Transposed index covers every pair once.
-  EXPECT_EQ(nl.rslot.size(), nl.jdx.size());
+  EXPECT_EQ(nl.rpair.size(), nl.jdx.size());
 }
 
 }  // namespace
