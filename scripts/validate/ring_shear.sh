@@ -55,7 +55,7 @@ for c in "${cases[@]}"; do
 import json, math, os, statistics, sys
 d, seeds = sys.argv[1], sys.argv[2:]
 cols = ["seed", "phi_lin_deg", "cohesion_Pa", "sigma_1_Pa", "sigma_c_Pa", "ffc", "phi_e_deg", "phi_sf_deg",
-        "preshear_sigma_Pa", "preshear_tau_Pa", "bulk_density", "particles", "steps", "wall_time_s", "particle_steps_per_s"]
+        "preshear_sigma_Pa", "preshear_tau_Pa", "bulk_density", "particles", "steps", "wall_time_s", "cpu_time_s", "particle_steps_per_s"]
 rows = []
 for s in seeds:
     f = os.path.join(d, "seed_" + s, "summary.json")
@@ -69,14 +69,14 @@ for s in seeds:
     ffc = y["ffc"] if not isinstance(y["ffc"], str) else math.inf
     rows.append([s, y["phi_lin_deg"], y["cohesion"], y["sigma_1"], y["sigma_c"], ffc, y["phi_e_deg"], y["phi_sf_deg"],
                  j["pre_shear"]["sigma"], j["pre_shear"]["tau"], j["bulk_density_preshear"], j["particles"], j["steps"],
-                 j["wall_time_s"], j["particle_steps_per_s"]])
+                 j["wall_time_s"], j.get("cpu_time_s", math.nan), j["particle_steps_per_s"]])
 with open(os.path.join(d, "results.csv"), "w") as f:
     f.write(",".join(cols) + "\n")
     for r in rows:
         f.write(",".join(f"{x:.6g}" if isinstance(x, float) else str(x) for x in r) + "\n")
 lines = [f"{os.path.basename(d)}: {len(rows)} seeds ({' '.join(r[0] for r in rows)})"]
 for k in ["phi_lin_deg", "cohesion_Pa", "sigma_1_Pa", "sigma_c_Pa", "ffc", "phi_e_deg", "phi_sf_deg", "preshear_tau_Pa",
-          "bulk_density", "wall_time_s"]:
+          "bulk_density", "wall_time_s", "cpu_time_s"]:
     i = cols.index(k)
     v = [float(r[i]) for r in rows if math.isfinite(float(r[i]))]
     if not v:

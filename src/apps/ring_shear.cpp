@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -460,6 +461,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   }
   const double wall_s = std::chrono::duration<double>(clock::now() - t_wall0).count();
   j["wall_time_s"] = wall_s;
+  j["cpu_time_s"] = double(std::clock()) / CLOCKS_PER_SEC;  // all threads of this process
   j["steps"] = s.step;
   j["simulated_time"] = s.time;
   j["particle_steps_per_s"] = double(s.step) * double(s.particles.size()) / wall_s;
