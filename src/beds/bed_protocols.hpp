@@ -58,6 +58,19 @@ PipeMotion move_pipe(const Case& c, const System& filled, size_t pipe, size_t ba
 /// plane with normal +z.
 void check_pipe(const Case& c, const System& s, size_t pipe, size_t base);
 
+/// The common start of the pipe protocols: loads the case, finds and checks the pipe and base
+/// walls, creates the output folder, runs the fill (the case's duration) and measures the bed.
+struct PipeFill {
+  Case c;
+  std::unique_ptr<System> s;
+  size_t pipe = 0, base = 0;
+  std::string out;
+  double R = 0, z0 = 0, g = 0;  ///< pipe radius, base height (m), |gravity| (m/s^2)
+  double d = 0;                 ///< mean particle diameter, m
+  PipeBed bed;                  ///< the filled bed
+};
+PipeFill fill_pipe(const BedOptions& o, const std::string& pipe, const std::string& base);
+
 /// Vibration: fill, then shake a clone (pipe and base oscillate vertically), compare the solids
 /// fraction and the piston (wall-down) force of both beds trimmed to the same height.
 struct VibrateOptions {

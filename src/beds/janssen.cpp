@@ -64,6 +64,25 @@ void check_pipe(const Case& c, const System& s, size_t pipe, size_t base) {
     throw InputError(c.file, 0, "wall." + B.name, "the pedestal must be a plane with normal [0, 0, 1]");
 }
 
+PipeFill fill_pipe(const BedOptions& o, const std::string& pipe, const std::string& base) {
+  PipeFill f;
+  f.c = load(o);
+  f.s = build_checked(f.c);
+  f.pipe = find_wall(f.c, *f.s, pipe, "--pipe");
+  f.base = find_wall(f.c, *f.s, base, "--base");
+  check_pipe(f.c, *f.s, f.pipe, f.base);
+  f.out = out_folder(o, f.c);
+  fs::create_directories(f.out);
+  f.R = f.s->walls[f.pipe].radius;
+  f.z0 = f.s->walls[f.base].point.z;
+  f.g = norm(f.c.cfg.gravity);
+  spdlog::info("fill: {} particles, {:.3g} s", f.s->particles.size(), f.c.duration);
+  advance(*f.s, f.c.duration, "fill", o.quiet);
+  f.bed = measure_pipe_bed(*f.s, f.R, f.z0);
+  f.d = 2 * mean_radius(*f.s);
+  return f;
+}
+
 PipeMotion move_pipe(const Case& c, const System& filled, size_t pipe, size_t base, double height, double velocity,
                      double travel, double settle, double rho_bulk, bool stresses, double slice,
                      const std::string& label, bool quiet, const std::string& vtk_dir) {
@@ -118,17 +137,13 @@ PipeMotion move_pipe(const Case& c, const System& filled, size_t pipe, size_t ba
 }
 
 int run_janssen(const BedOptions& o, const JanssenOptions& jo) {
-  const Case c = load(o);
-  auto s = build_checked(c);
-  const size_t pipe = find_wall(c, *s, jo.pipe, "--pipe"), base = find_wall(c, *s, jo.base, "--base");
-  check_pipe(c, *s, pipe, base);
-  const fs::path out = out_folder(o, c);
-  fs::create_directories(out);
-  const double R = s->walls[pipe].radius, z0 = s->walls[base].point.z, g = norm(c.cfg.gravity);
-  spdlog::info("fill: {} particles, {:.3g} s", s->particles.size(), c.duration);
-  advance(*s, c.duration, "fill", o.quiet);
-  const PipeBed b0 = measure_pipe_bed(*s, R, z0);
-  const double d = 2 * mean_radius(*s);
+  PipeFill f = fill_pipe(o, jo.pipe, jo.base);
+  const Case& c = f.c;
+  auto& s = f.s;
+  const size_t pipe = f.pipe, base = f.base;
+  const fs::path out = f.out;
+  const double R = f.R, z0 = f.z0, g = f.g, d = f.d;
+  const PipeBed b0 = f.bed;
   spdlog::info("filled bed: height {:.4f} m ({:.1f} diameters of the pipe), solids fraction {:.4f}, bulk density {:.1f} kg/m^3",
                b0.height, b0.height / (2 * R), b0.phi, b0.rho_bulk);
   std::vector<double> heights = jo.heights;

@@ -34,17 +34,13 @@ Series vertical_profile(const System& s, double R, double z0, double top, double
 }  // namespace
 
 int run_vibrate(const BedOptions& o, const VibrateOptions& v) {
-  const Case c = load(o);
-  auto s = build_checked(c);
-  const size_t pipe = find_wall(c, *s, v.pipe, "--pipe"), base = find_wall(c, *s, v.base, "--base");
-  check_pipe(c, *s, pipe, base);
-  const fs::path out = out_folder(o, c);
-  fs::create_directories(out);
-  const double R = s->walls[pipe].radius, z0 = s->walls[base].point.z, g = norm(c.cfg.gravity);
-  spdlog::info("fill: {} particles, {:.3g} s", s->particles.size(), c.duration);
-  advance(*s, c.duration, "fill", o.quiet);
-  const PipeBed loose = measure_pipe_bed(*s, R, z0);
-  const double d = 2 * mean_radius(*s);
+  PipeFill f = fill_pipe(o, v.pipe, v.base);
+  const Case& c = f.c;
+  auto& s = f.s;
+  const size_t pipe = f.pipe, base = f.base;
+  const fs::path out = f.out;
+  const double R = f.R, z0 = f.z0, g = f.g, d = f.d;
+  const PipeBed loose = f.bed;
 
   // Shake a clone: pipe and base oscillate together, a whole number of cycles (so the walls
   // end where they started), then settle.
