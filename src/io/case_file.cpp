@@ -203,6 +203,9 @@ Case parse(toml::table& root, const std::string& file) {
     c.cfg.skin = s.num("skin", 0.0, 0, kInf, false, "m");
     c.cfg.threads = int(s.integer("threads", 0));
     c.cfg.sort_every = int(s.integer("sort_every", 20));
+    const auto pmin = s.integer("parallel_min", 4000);
+    if (pmin < 0) s.fail("parallel_min", "expected a particle count >= 0");
+    c.cfg.parallel_min = long(pmin);
     c.seed = uint64_t(s.integer("seed", 1));
     c.audit_velocity = s.num("audit_velocity", 0.0, 0, kInf, false, "m/s");
     s.finish();
