@@ -36,6 +36,7 @@ struct RingShearSpec {
   double shear_distance = 0.005;    ///< m, longest shear to failure
   double steady_drift = 0.1;        ///< pre-shear steady: relative drift of tau over its last quarter
   double preshear_max_factor = 2.5; ///< a pre-shear goes on up to this many times its distance
+  bool normalize_points = false;    ///< evaluate ASTM-normalized shear points (else the measured)
   double relax_time = 0.01;         ///< s at rest after changing the normal stress
   double peak_drop = 0.1;           ///< failure: averaged tau fell this fraction below its maximum
   double sample_interval = 0;       ///< s between series rows (0: 200 steps)
