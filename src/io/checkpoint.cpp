@@ -12,7 +12,7 @@ namespace cohdem {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'O', 'H', 'D', 'E', 'M', 'C', 'K'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: neighbor-list reference state and application state
 
 class Out {
  public:
@@ -74,7 +74,7 @@ class In {
 
 }  // namespace
 
-void write_checkpoint(const std::filesystem::path& path, const System& s) {
+void write_checkpoint(const std::filesystem::path& path, const System& s, const std::string& app_state) {
   Out o;
   for (char c : kMagic) o.pod(c);
   o.pod(kVersion);
@@ -99,10 +99,13 @@ void write_checkpoint(const std::filesystem::path& path, const System& s) {
   for (const PourSource& p : s.pours) { o.pod(p.inserted); o.pod(p.next_time); }
   const System::SavedContacts c = s.saved_contacts();
   o.vec(c.pair_keys); o.vec(c.pair_data); o.vec(c.wall_keys); o.vec(c.wall_data);
+  const NeighborList::Reference ref = s.nl.reference();
+  o.vec(ref.x); o.vec(ref.r); o.vec(ref.wall);
+  o.str(app_state);
   write_file_atomic(path, o.bytes());
 }
 
-void read_checkpoint(const std::filesystem::path& path, System& s) {
+std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path.string(), 0, "", "cannot open checkpoint file");
   std::stringstream ss;
@@ -110,7 +113,8 @@ void read_checkpoint(const std::filesystem::path& path, System& s) {
   In in(ss.str(), path.string());
   for (char c : kMagic)
     if (in.pod<char>() != c) throw InputError(path.string(), 0, "", "not a cohdem checkpoint");
-  if (in.pod<uint32_t>() != kVersion) throw InputError(path.string(), 0, "", "unsupported checkpoint version");
+  const uint32_t version = in.pod<uint32_t>();
+  if (version < 1 || version > kVersion) throw InputError(path.string(), 0, "", "unsupported checkpoint version");
   const std::string model = in.str();
   const uint64_t stride = in.pod<uint64_t>();
   if (model != s.model->name() || stride != s.model->state_size())
@@ -139,8 +143,19 @@ void read_checkpoint(const std::filesystem::path& path, System& s) {
   System::SavedContacts c;
   in.vec(c.pair_keys); in.vec(c.pair_data); in.vec(c.wall_keys); in.vec(c.wall_data);
   s.restore_contacts(std::move(c));
-  s.resume_prepare();
+  std::string app_state;
+  if (version >= 2) {  // version 1 was written at a rebuild step: the current state is the reference
+    NeighborList::Reference ref;
+    in.vec(ref.x); in.vec(ref.r); in.vec(ref.wall);
+    app_state = in.str();
+    if (ref.x.size() != P.id.size() || ref.r.size() != P.id.size() || ref.wall.size() != s.walls.size())
+      throw InputError(path.string(), 0, "", "checkpoint's neighbor-list state does not match its particles");
+    s.resume_prepare(&ref);
+  } else {
+    s.resume_prepare();
+  }
   s.nl.stats.builds = builds;  // the restart's own build does not count (re-sort schedule)
+  return app_state;
 }
 
 }  // namespace cohdem

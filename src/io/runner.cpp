@@ -238,7 +238,8 @@ int run_case(const Case& c, const RunOptions& opt) {
   auto sys = build_system(c, !resuming);
   System& s = *sys;
   if (resuming) {
-    read_checkpoint(opt.resume, s);
+    if (!read_checkpoint(opt.resume, s).empty())
+      throw InputError(opt.resume, 0, "--resume", "this checkpoint was written by the ring shear tester: resume it with its ring shear case");
     spdlog::info("resuming from {} at step {} (t = {:.6g} s)", opt.resume, s.step, s.time);
   }
   const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
@@ -332,7 +333,6 @@ int run_case(const Case& c, const RunOptions& opt) {
   uint64_t particle_steps = 0;
   const uint64_t first_step = s.step + 1;
   for (uint64_t k = first_step; k <= nsteps; ++k) {
-    const uint64_t builds = s.nl.stats.builds;
     s.step_once();
     particle_steps += s.particles.size();
     if (k % series_every == 0 || k == nsteps) {
@@ -342,8 +342,8 @@ int run_case(const Case& c, const RunOptions& opt) {
     }
     if ((frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0))) write_frame();
     const auto now = clock::now();
-    // Checkpoints at the end of a rebuild step, so a restart continues bit for bit.
-    if (c.output.checkpoint_interval > 0 && s.nl.stats.builds != builds &&
+    // Checkpoints at the end of a step (a restart continues bit for bit from any step).
+    if (c.output.checkpoint_interval > 0 &&
         std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval) {
       checkpoint();
       last_ck = now;

@@ -303,6 +303,21 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ++stats.builds;
 }
 
+void NeighborList::rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const Domain& dom, double skin, double reach,
+                              const Reference& ref) {
+  if (ref.x.size() != p.size() || ref.r.size() != p.size() || ref.wall.size() != walls.size())
+    throw RunError("neighbor list reference state does not match the particles and walls");
+  std::vector<Vec3> x = ref.x, wp(walls.size());
+  std::vector<double> r = ref.r;
+  p.x.swap(x);
+  p.radius.swap(r);
+  for (size_t w = 0; w < walls.size(); ++w) { wp[w] = walls[w].point; walls[w].point = ref.wall[w]; }
+  build(p, walls, dom, skin, reach, false);
+  p.x.swap(x);
+  p.radius.swap(r);
+  for (size_t w = 0; w < walls.size(); ++w) walls[w].point = wp[w];
+}
+
 bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
   if (x_ref_.size() != p.size()) return true;
   const long n = long(p.size());

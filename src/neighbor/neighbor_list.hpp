@@ -78,6 +78,21 @@ class NeighborList {
   /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
   bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
 
+  /// The state the lists were last built from (positions, radii, wall points): a checkpoint
+  /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any
+  /// step (not only at a rebuild step) continues bit for bit.
+  struct Reference {
+    std::vector<Vec3> x;
+    std::vector<double> r;
+    std::vector<Vec3> wall;
+  };
+  Reference reference() const { return {x_ref_, r_ref_, wall_ref_}; }
+  /// Builds the lists as they were built from `ref` (particles in their current order, no
+  /// re-sort), leaving positions, radii and walls as they are now. Throws RunError when `ref`
+  /// does not match the particle or wall count.
+  void rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const Domain& dom, double skin, double reach,
+                  const Reference& ref);
+
   size_t pair_count() const { return jdx.size(); }
   size_t wall_entry_count() const { return wall.size(); }
   size_t live_contacts() const;

@@ -52,9 +52,10 @@ size_t System::insert(const InsertSpec& spec) {
   return res.x.size();
 }
 
-void System::resume_prepare() {
+void System::resume_prepare(const NeighborList::Reference* ref) {
   prepare_reach();
-  nl.build(particles, walls, cfg.domain, cfg.skin, reach_, false);
+  if (ref) nl.rebuild_at(particles, walls, cfg.domain, cfg.skin, reach_, *ref);
+  else nl.build(particles, walls, cfg.domain, cfg.skin, reach_, false);
   if (has_pending_) install_pending();
   dirty_ = false;
 }

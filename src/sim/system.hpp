@@ -86,9 +86,11 @@ class System {
   /// Builds lists and evaluates forces at the current state (call once before stepping,
   /// and after changing particles or walls by hand).
   void prepare();
-  /// After a checkpoint restart: builds the lists and installs the saved contacts without
-  /// evaluating forces (the checkpoint carries them), so the run continues bit for bit.
-  void resume_prepare();
+  /// After a checkpoint restart: builds the lists (from `ref`, the state of the last build
+  /// before the checkpoint, when given; else from the current positions) and installs the
+  /// saved contacts without evaluating forces (the checkpoint carries them), so the run
+  /// continues bit for bit.
+  void resume_prepare(const NeighborList::Reference* ref = nullptr);
   void step_once();
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
 

@@ -1,6 +1,8 @@
-// Checkpoint/restart: a run interrupted after a rebuild step, written to disk and resumed in a
-// fresh System, must continue bit for bit like the uninterrupted run (positions, velocities,
-// spins and the tangential/rolling history all enter the comparison through the motion).
+// Checkpoint/restart: a run interrupted at any step (right after a neighbor-list rebuild, or
+// between rebuilds, or right after a build that re-sorted the particles), written to disk and
+// resumed in a fresh System, must continue bit for bit like the uninterrupted run (positions,
+// velocities, spins and the tangential/rolling history all enter the comparison through the
+// motion; 1500 steps span several rebuilds).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -21,9 +23,10 @@ std::unique_ptr<System> setup() {
   s->cfg.sort_every = 3;
   return s;
 }
-}  // namespace
 
-TEST(Checkpoint, RestartIsBitwiseIdentical) {
+enum class StopAt { RebuildStep, BetweenRebuilds, AfterResort };
+
+void restart_is_bitwise(StopAt where) {
   auto a = setup();
   InsertSpec spec;
   spec.region.kind = Region::Kind::Box;
@@ -38,17 +41,43 @@ TEST(Checkpoint, RestartIsBitwiseIdentical) {
   a->insert(spec);
   a->prepare();
   a->run(20000);  // particles fall and collide (40 ms)
-  // Stop at the end of a step with a rebuild.
   uint64_t builds = a->nl.stats.builds;
-  while (a->nl.stats.builds == builds) a->step_once();
+  switch (where) {
+    case StopAt::RebuildStep:  // the end of a step with a rebuild
+      while (a->nl.stats.builds == builds) a->step_once();
+      break;
+    case StopAt::BetweenRebuilds: {  // a step in the middle of a stretch without rebuilds
+      while (a->nl.stats.builds == builds) a->step_once();
+      builds = a->nl.stats.builds;
+      const uint64_t s0 = a->step;
+      while (a->nl.stats.builds == builds) a->step_once();
+      const uint64_t gap = a->step - s0;
+      ASSERT_GE(gap, 4u);
+      builds = a->nl.stats.builds;
+      for (uint64_t k = 0; k < gap / 2 && a->nl.stats.builds == builds; ++k) a->step_once();
+      ASSERT_EQ(a->nl.stats.builds, builds) << "expected to stop between rebuilds";
+      a->step_once();  // at least one step after the build
+      ASSERT_EQ(a->nl.stats.builds, builds);
+      break;
+    }
+    case StopAt::AfterResort:  // two steps after a build that re-sorted the particles
+      while (a->nl.stats.builds % uint64_t(a->cfg.sort_every) != 1 || a->nl.stats.builds == builds) {
+        builds = a->nl.stats.builds;
+        a->step_once();
+      }
+      a->step_once();
+      a->step_once();
+      break;
+  }
   ASSERT_GT(a->pair_contact_count(), 50u);
   const auto path = std::filesystem::temp_directory_path() / "cohdem_test_checkpoint.bin";
-  write_checkpoint(path, *a);
+  const std::string app("app\0state", 9);  // opaque bytes, zeros included
+  write_checkpoint(path, *a, app);
   const uint64_t at = a->step;
   a->run(1500);
 
   auto b = setup();
-  read_checkpoint(path, *b);
+  EXPECT_EQ(read_checkpoint(path, *b), app);
   EXPECT_EQ(b->step, at);
   b->run(1500);
   std::filesystem::remove(path);
@@ -60,7 +89,14 @@ TEST(Checkpoint, RestartIsBitwiseIdentical) {
                 a->particles.v[i] == b->particles.v[i] && a->particles.omega[i] == b->particles.omega[i]);
   EXPECT_EQ(differ, 0u) << "particles differing after restart";
   EXPECT_EQ(a->walls[0].force, b->walls[0].force);
+  EXPECT_EQ(a->nl.stats.builds, b->nl.stats.builds);
 }
+
+}  // namespace
+
+TEST(Checkpoint, RestartAtRebuildStepIsBitwiseIdentical) { restart_is_bitwise(StopAt::RebuildStep); }
+TEST(Checkpoint, RestartBetweenRebuildsIsBitwiseIdentical) { restart_is_bitwise(StopAt::BetweenRebuilds); }
+TEST(Checkpoint, RestartAfterResortIsBitwiseIdentical) { restart_is_bitwise(StopAt::AfterResort); }
 
 TEST(Checkpoint, RejectsOtherModelAndTruncation) {
   auto a = setup();
