@@ -52,6 +52,11 @@ int main(int argc, char** argv) {
   std::string resume;
   run->add_option("--resume", resume, "continue from a checkpoint (OUT/checkpoint.bin) of the same case")
       ->check(CLI::ExistingFile);
+  double max_wall_time = -1;
+  run->add_option("--max-wall-time", max_wall_time,
+                  "stop at the first checkpoint after this many seconds of wall time (a ring shear test: at the end of "
+                  "the current stage), exit status 75; continue with --resume")
+      ->check(CLI::NonNegativeNumber);
 
   auto* check = app.add_subcommand("check", "validate a case and print derived quantities without running");
   check->add_option("case", case_path, "case file (TOML); the embedded default when omitted");
@@ -143,6 +148,7 @@ int main(int argc, char** argv) {
       o.out_dir = out_dir;
       o.quiet = quiet;
       o.resume = resume;
+      o.max_wall_time = max_wall_time;
       return run_case(c, o);
     }
     if (check->parsed()) return check_case(load(case_path, sets));

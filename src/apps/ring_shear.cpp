@@ -11,6 +11,7 @@
 #include "analysis/yield_locus.hpp"
 #include "apps/ring_shear_spec.hpp"
 #include "core/error.hpp"
+#include "io/checkpoint.hpp"
 #include "io/atomic_file.hpp"
 #include "io/csv.hpp"
 #include "io/plot.hpp"
@@ -118,19 +119,31 @@ struct Sample {
   int phase;
 };
 
+struct Point { double sigma, tau, tau_pre, sigma_pre_meas; };
+
+/// Settings a checkpoint must have been written with to be resumed by this case.
+nlohmann::json fingerprint(const Case& c) {
+  const RingShearSpec& r = *c.ring_shear;
+  return {{"ring_shear.cell", r.cell}, {"ring_shear.length", r.length}, {"ring_shear.width", r.width},
+          {"ring_shear.r_inner", r.r_inner}, {"ring_shear.r_outer", r.r_outer}, {"ring_shear.sigma_pre", r.sigma_pre},
+          {"ring_shear.fractions", r.fractions}, {"ring_shear.shear_velocity", r.shear_velocity},
+          {"ring_shear.lid_mass", r.lid_mass}, {"simulation.dt", c.cfg.dt}, {"simulation.seed", c.seed}};
+}
+
 }  // namespace
 
 int run_ring_shear(const Case& c, const RunOptions& opt) {
   using clock = std::chrono::steady_clock;
   const RingShearSpec& r = *c.ring_shear;
   const auto t_wall0 = clock::now();
+  const bool resuming = !opt.resume.empty();
   const bool box = r.cell == "shear_box";
   const double area = box ? r.length * r.width : M_PI * (r.r_outer * r.r_outer - r.r_inner * r.r_inner);
   const double r_mean = box ? 0.0 : 0.5 * (r.r_inner + r.r_outer);
   const double rmax = r.size.max_radius();
 
   // --- System, walls, rough layers --------------------------------------------------------
-  auto sys = build_system(c);  // materials, model, [[wall]]s if any
+  auto sys = build_system(c, !resuming);  // materials, model, [[wall]]s if any
   System& s = *sys;
   if (box) {
     s.cfg.domain.lo = {0, 0, -1};
@@ -172,13 +185,13 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   lid.normal = {0, 0, -1};
   s.walls.push_back(lid);
   const int lid_idx = int(s.walls.size()) - 1;
-  if (r.rough_layers) {
+  if (r.rough_layers && !resuming) {
     Rng rng(c.seed + 101);
     rough_layer(s, r, 0.0, false, -1, rng);
     rough_layer(s, r, lid_park, true, lid_idx, rng);
   }
-  const size_t n_fixed = s.particles.size();
-  {
+  size_t n_fixed = s.particles.size();
+  if (!resuming) {
     InsertSpec ins;
     ins.species = r.material;
     ins.size = r.size;
@@ -202,7 +215,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
       throw InputError(c.file, r.line, "ring_shear.bed_height", e.what());
     }
   }
-  const size_t n_free = s.particles.size() - n_fixed;
+  size_t n_free = s.particles.size() - n_fixed;
 
   // Full and filling parameters (adhesion reduced while filling, as the MEPA paper does).
   const std::vector<ParamSet> full = c.pair_params;
@@ -211,7 +224,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   if (has_kadh)
     for (auto& p : filling)
       if (p.has("k2")) p.set("kadh", r.fill_kadh_fraction * p.values().at("k2"));
-  if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), filling);
+  if (has_kadh && !resuming) s.set_model(make_contact_model(c.model, c.rolling, c.file), filling);
 
   // Time-step audit.
   const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));
@@ -220,18 +233,93 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
 
   const fs::path out = opt.out_dir.empty() ? fs::path(c.output.folder) : fs::path(opt.out_dir);
   fs::create_directories(out);
+
+  // --- Procedure state, saved with the system at the end of every stage ---------------------
+  // Stages: 0 fill, settle and consolidate; 1 first pre-shear; then for each shear point i,
+  // 2 + 2i shear to failure, 3 + 2i the pre-shear after it. `stage` counts the stages done.
+  int stage = 0;
+  double sheared = 0;  // shear displacement of the lid (annulus: at the mean radius), m
+  int phase = 0;
+  std::vector<Sample> series;
+  std::vector<std::pair<double, std::string>> marks;
+  std::vector<Point> points;
+  std::vector<double> pre_tau, pre_sigma, pre_dist;
+  double free_mass = 0, wall_before = 0, cpu_before = 0;
+  for (size_t i = 0; i < s.particles.size(); ++i)
+    if (s.particles.flag[i] == kFree) free_mass += s.particles.mass[i];
+  auto save_state = [&] {
+    nlohmann::json j;
+    j["fingerprint"] = fingerprint(c);
+    j["stage"] = stage;
+    j["sheared"] = sheared;
+    j["phase"] = phase;
+    j["free_mass"] = free_mass;
+    j["n_fixed"] = n_fixed;
+    j["n_free"] = n_free;
+    j["wall_s"] = wall_before + std::chrono::duration<double>(clock::now() - t_wall0).count();
+    j["cpu_s"] = cpu_before + double(std::clock()) / CLOCKS_PER_SEC;
+    auto& js = j["series"] = nlohmann::json::array();
+    for (const auto& q : series) js.push_back({q.t, q.x, q.sigma, q.tau, q.height, q.density, q.phase});
+    auto& jm = j["marks"] = nlohmann::json::array();
+    for (const auto& m : marks) jm.push_back({m.first, m.second});
+    auto& jp = j["points"] = nlohmann::json::array();
+    for (const auto& p : points) jp.push_back({p.sigma, p.tau, p.tau_pre, p.sigma_pre_meas});
+    j["pre_tau"] = pre_tau;
+    j["pre_sigma"] = pre_sigma;
+    j["pre_dist"] = pre_dist;
+    const std::vector<uint8_t> bytes = nlohmann::json::to_cbor(j);
+    return std::string(bytes.begin(), bytes.end());
+  };
+  if (resuming) {
+    const std::string blob = read_checkpoint(opt.resume, s);
+    nlohmann::json j;
+    try {
+      if (blob.empty()) throw std::runtime_error("no ring shear state");
+      j = nlohmann::json::from_cbor(std::vector<uint8_t>(blob.begin(), blob.end()));
+    } catch (const std::exception&) {
+      throw InputError(opt.resume, 0, "--resume", "not a checkpoint of a ring shear run");
+    }
+    const nlohmann::json now = fingerprint(c);
+    for (const auto& [key, value] : now.items())
+      if (j["fingerprint"][key] != value)
+        throw InputError(c.file, r.line, key, "differs from the run that wrote " + opt.resume + " (" + j["fingerprint"][key].dump() +
+                                                  " there, " + value.dump() + " here): resume with the same case and --set options");
+    stage = j["stage"];
+    sheared = j["sheared"];
+    phase = j["phase"];
+    free_mass = j["free_mass"];
+    n_fixed = j["n_fixed"];
+    n_free = j["n_free"];
+    wall_before = j["wall_s"];
+    cpu_before = j["cpu_s"];
+    for (const auto& q : j["series"])
+      series.push_back({q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), q[4].get<double>(),
+                        q[5].get<double>(), q[6].get<int>()});
+    for (const auto& m : j["marks"]) marks.push_back({m[0].get<double>(), m[1].get<std::string>()});
+    for (const auto& p : j["points"]) points.push_back({p[0].get<double>(), p[1].get<double>(), p[2].get<double>(), p[3].get<double>()});
+    pre_tau = j["pre_tau"].get<std::vector<double>>();
+    pre_sigma = j["pre_sigma"].get<std::vector<double>>();
+    pre_dist = j["pre_dist"].get<std::vector<double>>();
+    spdlog::info("resuming the ring shear test from {} after stage {} of {} (step {}, t = {:.6g} s)", opt.resume, stage,
+                 2 + 2 * r.fractions.size(), s.step, s.time);
+  }
+  const int stages = int(2 + 2 * r.fractions.size());
+  // Ends a stage: writes the checkpoint; true when the wall-time budget is spent (stop there).
+  auto stage_done = [&] {
+    ++stage;
+    write_checkpoint(out / "checkpoint.bin", s, save_state());
+    if (opt.max_wall_time < 0 || stage >= stages ||
+        std::chrono::duration<double>(clock::now() - t_wall0).count() < opt.max_wall_time)
+      return false;
+    spdlog::warn("wall-time limit of {} s reached: stopped after stage {} of {} (t = {:.6g} s); continue with --resume {}",
+                 opt.max_wall_time, stage, stages, s.time, (out / "checkpoint.bin").string());
+    return true;
+  };
   spdlog::info("ring shear ({}): {} particles + {} in rough layers, area {:.4g} m^2, sigma_pre {:.4g} Pa, dt {:.3g} s",
                r.cell, n_free, n_fixed, area, r.sigma_pre, c.cfg.dt);
 
   // --- Measurements ------------------------------------------------------------------------
   Wall* L = &s.walls[lid_idx];
-  double sheared = 0;  // shear displacement of the lid (annulus: at the mean radius), m
-  int phase = 0;
-  std::vector<Sample> series;
-  std::vector<std::pair<double, std::string>> marks;
-  double free_mass = 0;
-  for (size_t i = 0; i < s.particles.size(); ++i)
-    if (s.particles.flag[i] == kFree) free_mass += s.particles.mass[i];
   auto sigma_now = [&] { return L->force.z / area; };
   auto tau_now = [&] {
     if (box) return std::fabs(L->force.x) / area;
@@ -290,43 +378,43 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   };
 
   // --- Procedure ---------------------------------------------------------------------------
-  s.prepare();
-  phase = 0;  // fill and settle: at least the free-fall time of the fill, then until calm
-  const double t_fall = std::sqrt(2 * h_insert / std::max(norm(c.cfg.gravity), 1e-12));
-  advance(std::min(t_fall, r.settle_time));
-  while (s.time < r.settle_time) {
-    double vmax = 0;
-    for (size_t i = 0; i < s.particles.size(); ++i)  // free particles (indices change when the list re-sorts)
-      if (s.particles.flag[i] == kFree) vmax = std::max(vmax, norm(s.particles.v[i]));
-    if (vmax < r.settle_velocity) break;
-    advance(0.005);
+  if (stage < 1) {  // stage 0: fill, settle, lid, consolidate
+    s.prepare();
+    phase = 0;  // fill and settle: at least the free-fall time of the fill, then until calm
+    const double t_fall = std::sqrt(2 * h_insert / std::max(norm(c.cfg.gravity), 1e-12));
+    advance(std::min(t_fall, r.settle_time));
+    while (s.time < r.settle_time) {
+      double vmax = 0;
+      for (size_t i = 0; i < s.particles.size(); ++i)  // free particles (indices change when the list re-sorts)
+        if (s.particles.flag[i] == kFree) vmax = std::max(vmax, norm(s.particles.v[i]));
+      if (vmax < r.settle_velocity) break;
+      advance(0.005);
+    }
+    marks.push_back({sheared, "settled"});
+    // Lower the lid onto the bed (rigidly with its rough layer) just above the 95th percentile
+    // of the particle tops (a few particles may still bounce), restore full adhesion.
+    std::vector<double> tops;
+    for (size_t i = 0; i < s.particles.size(); ++i)
+      if (s.particles.flag[i] == kFree) tops.push_back(s.particles.x[i].z + s.particles.radius[i]);
+    std::sort(tops.begin(), tops.end());
+    const double top = tops.empty() ? layer : tops[size_t(0.95 * double(tops.size() - 1))];
+    const double drop = L->point.z - (top + layer + 0.5 * rmax);
+    L->point.z -= drop;
+    L->center.z -= drop;
+    for (size_t i = 0; i < s.particles.size(); ++i)
+      if (s.particles.flag[i] == kAttached) s.particles.x[i].z -= drop;
+    if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), full);
+    else s.prepare();
+    phase = 1;  // consolidation: approach fast until the lid carries 10% of the load, then servo
+    servo_approach(r.sigma_pre);
+    spdlog::debug("lid at z = {:.5g} m, bed top (95%) {:.5g} m, vn {:.3g}", L->point.z, top, L->vn);
+    advance(1.0, [&] { return sigma_now() > 0.1 * r.sigma_pre; });
+    set_sigma(r.sigma_pre);
+    advance(r.consolidate_time);
+    if (c.output.vtk) write_state_vtk(s, out.string(), "consolidated", false);  // ParaView: particles_consolidated.vtu
+    if (stage_done()) return kExitResumable;
   }
-  marks.push_back({sheared, "settled"});
-  // Lower the lid onto the bed (rigidly with its rough layer) just above the 95th percentile
-  // of the particle tops (a few particles may still bounce), restore full adhesion.
-  std::vector<double> tops;
-  for (size_t i = 0; i < s.particles.size(); ++i)
-    if (s.particles.flag[i] == kFree) tops.push_back(s.particles.x[i].z + s.particles.radius[i]);
-  std::sort(tops.begin(), tops.end());
-  const double top = tops.empty() ? layer : tops[size_t(0.95 * double(tops.size() - 1))];
-  const double drop = L->point.z - (top + layer + 0.5 * rmax);
-  L->point.z -= drop;
-  L->center.z -= drop;
-  for (size_t i = 0; i < s.particles.size(); ++i)
-    if (s.particles.flag[i] == kAttached) s.particles.x[i].z -= drop;
-  if (has_kadh) s.set_model(make_contact_model(c.model, c.rolling, c.file), full);
-  else s.prepare();
-  phase = 1;  // consolidation: approach fast until the lid carries 10% of the load, then servo
-  servo_approach(r.sigma_pre);
-  spdlog::debug("lid at z = {:.5g} m, bed top (95%) {:.5g} m, vn {:.3g}", L->point.z, top, L->vn);
-  advance(1.0, [&] { return sigma_now() > 0.1 * r.sigma_pre; });
-  set_sigma(r.sigma_pre);
-  advance(r.consolidate_time);
-  if (c.output.vtk) write_state_vtk(s, out.string(), "consolidated", false);  // ParaView: particles_consolidated.vtu
 
-  struct Point { double sigma, tau, tau_pre, sigma_pre_meas; };
-  std::vector<Point> points;
-  std::vector<double> pre_tau, pre_sigma, pre_dist;
   // Pre-shear to steady state (ASTM D6773): shear `dist`, then go on in steps of dist/4 while
   // tau over the last quarter of the pre-shear still drifts by more than steady_drift, up to
   // preshear_max_factor x dist. The steady value is the mean over that last quarter.
@@ -361,34 +449,44 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
       spdlog::warn("pre-shear {} not steady after {:.3g} mm (relative drift {:.3f} over the last quarter, limit {:.3f})", pre_tau.size(),
                    1e3 * done, st.relative_drift, r.steady_drift);
   };
-  preshear(r.first_preshear_distance);
-  for (double f : r.fractions) {
-    // Relieve to the lower normal stress at rest, then shear to failure.
-    phase = 3;
-    set_sigma(f * r.sigma_pre);
-    advance(r.relax_time);
-    phase = 4;
-    marks.push_back({sheared, "shear " + std::to_string(int(std::lround(100 * f))) + "%"});
-    set_shear(r.shear_velocity);
-    // Failure: the peak of tau averaged over tau_window (single samples of a small cell are
-    // noisy); the normal stress is averaged over the same window.
-    double tau_max = 0, sig_at_max = 0;
-    const size_t first = series.size();
-    advance(r.shear_distance / r.shear_velocity, [&] {
-      if (series.size() - first < win) return false;
-      const double tm = window_mean(&Sample::tau);
-      if (tm > tau_max) { tau_max = tm; sig_at_max = window_mean(&Sample::sigma); }
-      return tau_max > 0 && tm < (1 - r.peak_drop) * tau_max;
-    });
-    set_shear(0);
-    points.push_back({sig_at_max, tau_max, pre_tau.back(), pre_sigma.back()});
-    spdlog::info("shear point {}: sigma = {:.4g} Pa, tau = {:.4g} Pa (pre-shear tau {:.4g} Pa)", points.size(), sig_at_max, tau_max,
-                 pre_tau.back());
-    // Pre-shear again before the next point (and at the end, for the last steady value).
-    phase = 3;
-    set_sigma(r.sigma_pre);
-    advance(r.relax_time);
-    preshear(r.preshear_distance);
+  if (stage < 2) {
+    preshear(r.first_preshear_distance);
+    if (stage_done()) return kExitResumable;
+  }
+  for (size_t i = 0; i < r.fractions.size(); ++i) {
+    const double f = r.fractions[i];
+    if (stage < int(3 + 2 * i)) {  // stage 2 + 2i: shear to failure at f x sigma_pre
+      // Relieve to the lower normal stress at rest, then shear to failure.
+      phase = 3;
+      set_sigma(f * r.sigma_pre);
+      advance(r.relax_time);
+      phase = 4;
+      marks.push_back({sheared, "shear " + std::to_string(int(std::lround(100 * f))) + "%"});
+      set_shear(r.shear_velocity);
+      // Failure: the peak of tau averaged over tau_window (single samples of a small cell are
+      // noisy); the normal stress is averaged over the same window.
+      double tau_max = 0, sig_at_max = 0;
+      const size_t first = series.size();
+      advance(r.shear_distance / r.shear_velocity, [&] {
+        if (series.size() - first < win) return false;
+        const double tm = window_mean(&Sample::tau);
+        if (tm > tau_max) { tau_max = tm; sig_at_max = window_mean(&Sample::sigma); }
+        return tau_max > 0 && tm < (1 - r.peak_drop) * tau_max;
+      });
+      set_shear(0);
+      points.push_back({sig_at_max, tau_max, pre_tau.back(), pre_sigma.back()});
+      spdlog::info("shear point {}: sigma = {:.4g} Pa, tau = {:.4g} Pa (pre-shear tau {:.4g} Pa)", points.size(), sig_at_max, tau_max,
+                   pre_tau.back());
+      // Pre-shear again before the next point (and at the end, for the last steady value).
+      phase = 3;
+      set_sigma(r.sigma_pre);
+      advance(r.relax_time);
+      if (stage_done()) return kExitResumable;
+    }
+    if (stage < int(4 + 2 * i)) {  // stage 3 + 2i: pre-shear again
+      preshear(r.preshear_distance);
+      if (stage_done()) return kExitResumable;
+    }
   }
 
   if (c.output.vtk) write_state_vtk(s, out.string(), "final", false);
@@ -466,9 +564,9 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   } else {
     j["yield_locus"] = {{"error", eval_error}};
   }
-  const double wall_s = std::chrono::duration<double>(clock::now() - t_wall0).count();
-  j["wall_time_s"] = wall_s;
-  j["cpu_time_s"] = double(std::clock()) / CLOCKS_PER_SEC;  // all threads of this process
+  const double wall_s = wall_before + std::chrono::duration<double>(clock::now() - t_wall0).count();
+  j["wall_time_s"] = wall_s;  // a resumed run adds the time of the runs before
+  j["cpu_time_s"] = cpu_before + double(std::clock()) / CLOCKS_PER_SEC;  // all threads of this process
   j["steps"] = s.step;
   j["simulated_time"] = s.time;
   j["particle_steps_per_s"] = double(s.step) * double(s.particles.size()) / wall_s;

@@ -228,10 +228,7 @@ void write_state_vtk(const System& s, const std::string& dir, const std::string&
 }
 
 int run_case(const Case& c, const RunOptions& opt) {
-  if (c.ring_shear) {
-    if (!opt.resume.empty()) throw InputError("--resume", 0, "resume", "the ring shear procedure cannot be resumed yet");
-    return run_ring_shear(c, opt);
-  }
+  if (c.ring_shear) return run_ring_shear(c, opt);  // resumes from its own stage checkpoints
   using clock = std::chrono::steady_clock;
   spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
   const bool resuming = !opt.resume.empty();
@@ -347,6 +344,14 @@ int run_case(const Case& c, const RunOptions& opt) {
         std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval) {
       checkpoint();
       last_ck = now;
+    }
+    if (opt.max_wall_time >= 0 && k < nsteps && std::chrono::duration<double>(now - t0).count() >= opt.max_wall_time) {
+      check_finite(s);
+      csv.flush();
+      checkpoint();
+      spdlog::warn("wall-time limit of {} s reached: stopped at step {} of {} (t = {:.6g} s); continue with --resume {}",
+                   opt.max_wall_time, k, nsteps, s.time, (out / "checkpoint.bin").string());
+      return kExitResumable;
     }
     if (!opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval) {
       last = now;

@@ -12,7 +12,14 @@ struct RunOptions {
   std::string out_dir;   ///< overrides [output] folder when not empty
   bool quiet = false;    ///< no progress lines
   std::string resume;    ///< checkpoint to continue from (same case; output folder reused)
+  /// Wall-time budget, s (< 0: none). Past it the run stops at its next checkpoint (the ring
+  /// shear tester: the end of the current stage) and returns kExitResumable.
+  double max_wall_time = -1;
 };
+
+/// Exit status of a run stopped by RunOptions::max_wall_time: resume it with --resume
+/// (EX_TEMPFAIL of sysexits.h: a job script may resubmit).
+constexpr int kExitResumable = 75;
 
 /// Smallest particle radius of each material (particles present and pour sources).
 std::vector<double> min_radius_by_material(const System& s);
