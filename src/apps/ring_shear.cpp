@@ -117,6 +117,7 @@ void rough_layer(System& s, const RingShearSpec& r, double z0, bool below, int b
 struct Sample {
   double t, x, sigma, tau, height, density;
   int phase;
+  double tau_base;  ///< shear stress on the base (plane + its glued layer)
 };
 
 struct Point { double sigma, tau, tau_pre, sigma_pre_meas; };
@@ -243,7 +244,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   std::vector<Sample> series;
   std::vector<std::pair<double, std::string>> marks;
   std::vector<Point> points;
-  std::vector<double> pre_tau, pre_sigma, pre_dist;
+  std::vector<double> pre_tau, pre_sigma, pre_dist, pre_base;
   double free_mass = 0, wall_before = 0, cpu_before = 0;
   for (size_t i = 0; i < s.particles.size(); ++i)
     if (s.particles.flag[i] == kFree) free_mass += s.particles.mass[i];
@@ -259,7 +260,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     j["wall_s"] = wall_before + std::chrono::duration<double>(clock::now() - t_wall0).count();
     j["cpu_s"] = cpu_before + double(std::clock()) / CLOCKS_PER_SEC;
     auto& js = j["series"] = nlohmann::json::array();
-    for (const auto& q : series) js.push_back({q.t, q.x, q.sigma, q.tau, q.height, q.density, q.phase});
+    for (const auto& q : series) js.push_back({q.t, q.x, q.sigma, q.tau, q.height, q.density, q.phase, q.tau_base});
     auto& jm = j["marks"] = nlohmann::json::array();
     for (const auto& m : marks) jm.push_back({m.first, m.second});
     auto& jp = j["points"] = nlohmann::json::array();
@@ -267,6 +268,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     j["pre_tau"] = pre_tau;
     j["pre_sigma"] = pre_sigma;
     j["pre_dist"] = pre_dist;
+    j["pre_base"] = pre_base;
     const std::vector<uint8_t> bytes = nlohmann::json::to_cbor(j);
     return std::string(bytes.begin(), bytes.end());
   };
@@ -294,12 +296,13 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     cpu_before = j["cpu_s"];
     for (const auto& q : j["series"])
       series.push_back({q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), q[4].get<double>(),
-                        q[5].get<double>(), q[6].get<int>()});
+                        q[5].get<double>(), q[6].get<int>(), q[7].get<double>()});
     for (const auto& m : j["marks"]) marks.push_back({m[0].get<double>(), m[1].get<std::string>()});
     for (const auto& p : j["points"]) points.push_back({p[0].get<double>(), p[1].get<double>(), p[2].get<double>(), p[3].get<double>()});
     pre_tau = j["pre_tau"].get<std::vector<double>>();
     pre_sigma = j["pre_sigma"].get<std::vector<double>>();
     pre_dist = j["pre_dist"].get<std::vector<double>>();
+    pre_base = j["pre_base"].get<std::vector<double>>();
     spdlog::info("resuming the ring shear test from {} after stage {} of {} (step {}, t = {:.6g} s)", opt.resume, stage,
                  2 + 2 * r.fractions.size(), s.step, s.time);
   }
@@ -325,6 +328,20 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     if (box) return std::fabs(L->force.x) / area;
     return 3.0 * std::fabs(L->torque.z) / (2 * M_PI * (std::pow(r.r_outer, 3) - std::pow(r.r_inner, 3)));
   };
+  // The base's share: the base plane plus the frozen rough layer glued to it (the torque about
+  // the cell axis in the annulus). At steady shear it balances the lid's (the sample's momentum
+  // is steady; the annulus' side walls take the rest when they have friction).
+  const Wall* B = &s.walls[0];
+  auto tau_base_now = [&] {
+    Vec3 f = B->force, m = B->torque;  // torque about the base's centre, the cell axis
+    for (size_t i = 0; i < s.particles.size(); ++i)
+      if (s.particles.flag[i] == kFrozen) {
+        f += s.particles.force[i];
+        m += cross(s.particles.x[i] - B->center, s.particles.force[i]) + s.particles.torque[i];
+      }
+    if (box) return std::fabs(f.x) / area;
+    return 3.0 * std::fabs(m.z) / (2 * M_PI * (std::pow(r.r_outer, 3) - std::pow(r.r_inner, 3)));
+  };
   auto height_now = [&] { return L->point.z - 2 * layer; };  // between the rough layers
   const uint64_t sample_every =
       r.sample_interval > 0 ? std::max<uint64_t>(1, uint64_t(r.sample_interval / c.cfg.dt)) : 200;
@@ -337,7 +354,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
         sheared += (box ? std::fabs(L->velocity.x) : std::fabs(L->omega.z) * r_mean) * c.cfg.dt;
       if (s.step % sample_every == 0) {
         const double h = height_now();
-        series.push_back({s.time, sheared, sigma_now(), tau_now(), h, h > 0 ? free_mass / (area * h) : 0.0, phase});
+        series.push_back({s.time, sheared, sigma_now(), tau_now(), h, h > 0 ? free_mass / (area * h) : 0.0, phase, tau_base_now()});
         if (stop && stop()) return;
       }
       if (!opt.quiet && std::chrono::duration<double>(clock::now() - last_progress).count() > c.output.progress_interval) {
@@ -427,16 +444,19 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     advance(dist / r.shear_velocity);
     double done = dist;
     SteadyState st;
-    double sig_mean = 0;
+    double sig_mean = 0, base_mean = 0;
     for (;;) {
-      std::vector<double> t, tau, sig;
-      for (size_t q = first; q < series.size(); ++q) { t.push_back(series[q].t); tau.push_back(series[q].tau); sig.push_back(series[q].sigma); }
+      std::vector<double> t, tau, sig, base;
+      for (size_t q = first; q < series.size(); ++q) {
+        t.push_back(series[q].t); tau.push_back(series[q].tau); sig.push_back(series[q].sigma); base.push_back(series[q].tau_base);
+      }
       if (t.size() < 8) throw RunError("pre-shear too short to sample: raise preshear_distance or lower sample_interval");
       st = steady_state_value(t, tau, t.front(), t.back(), 0.25, r.steady_drift);
-      sig_mean = 0;
+      sig_mean = base_mean = 0;
       size_t ns = 0;
-      for (size_t q = t.size() * 3 / 4; q < t.size(); ++q) { sig_mean += sig[q]; ++ns; }
+      for (size_t q = t.size() * 3 / 4; q < t.size(); ++q) { sig_mean += sig[q]; base_mean += base[q]; ++ns; }
       sig_mean /= double(ns);
+      base_mean /= double(ns);
       if (st.steady || done >= r.preshear_max_factor * dist * (1 - 1e-9)) break;
       advance(0.25 * dist / r.shear_velocity);
       done += 0.25 * dist;
@@ -445,6 +465,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     pre_tau.push_back(st.mean);
     pre_sigma.push_back(sig_mean);
     pre_dist.push_back(done);
+    pre_base.push_back(base_mean);
     if (!st.steady)
       spdlog::warn("pre-shear {} not steady after {:.3g} mm (relative drift {:.3f} over the last quarter, limit {:.3f})", pre_tau.size(),
                    1e3 * done, st.relative_drift, r.steady_drift);
@@ -522,7 +543,11 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   j["particles"] = n_free;
   j["rough_layer_particles"] = n_fixed;
   j["sigma_pre_target"] = r.sigma_pre;
-  j["pre_shear"] = {{"sigma", sp}, {"tau", tp}, {"tau_each", pre_tau}, {"sigma_each", pre_sigma}, {"distance_each", pre_dist}};
+  double tb = 0;
+  for (double v : pre_base) tb += v;
+  tb /= double(pre_base.size());
+  j["pre_shear"] = {{"sigma", sp}, {"tau", tp}, {"tau_each", pre_tau}, {"sigma_each", pre_sigma}, {"distance_each", pre_dist},
+                    {"tau_base", tb}, {"tau_base_each", pre_base}};
   for (size_t q = 0; q < points.size(); ++q)
     j["shear_points"].push_back({{"sigma", points[q].sigma}, {"tau_measured", points[q].tau},
                                  {"tau_normalized", norm_pts[q].tau}, {"tau_preshear_before", points[q].tau_pre}});
@@ -572,8 +597,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   j["particle_steps_per_s"] = double(s.step) * double(s.particles.size()) / wall_s;
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   {
-    CsvWriter w(out / "series.csv", {"time", "shear_displacement", "sigma", "tau", "height", "bulk_density", "phase"});
-    for (const auto& q : series) w.row({q.t, q.x, q.sigma, q.tau, q.height, q.density, double(q.phase)});
+    CsvWriter w(out / "series.csv", {"time", "shear_displacement", "sigma", "tau", "height", "bulk_density", "phase", "tau_base"});
+    for (const auto& q : series) w.row({q.t, q.x, q.sigma, q.tau, q.height, q.density, double(q.phase), q.tau_base});
     CsvWriter p(out / "shear_points.csv", {"sigma", "tau_measured", "tau_normalized", "sigma_pre", "tau_pre"});
     for (size_t q = 0; q < points.size(); ++q)
       p.row({points[q].sigma, points[q].tau, norm_pts[q].tau, points[q].sigma_pre_meas, points[q].tau_pre});
@@ -620,7 +645,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   }
   // Text summary.
   fmt::print("\nring shear test ({}, {} particles, sigma_pre = {:.4g} kPa)\n", r.cell, n_free, 1e-3 * r.sigma_pre);
-  fmt::print("  pre-shear (steady state): sigma = {:.4g} kPa, tau = {:.4g} kPa\n", 1e-3 * sp, 1e-3 * tp);
+  fmt::print("  pre-shear (steady state): sigma = {:.4g} kPa, tau = {:.4g} kPa (lid; base {:.4g} kPa)\n", 1e-3 * sp, 1e-3 * tp, 1e-3 * tb);
   for (size_t q = 0; q < points.size(); ++q)
     fmt::print("  shear point {}: sigma = {:.4g} kPa, tau = {:.4g} kPa (after a pre-shear at {:.4g} kPa; normalized {:.4g} kPa)\n", q + 1,
                1e-3 * points[q].sigma, 1e-3 * points[q].tau, 1e-3 * points[q].tau_pre, 1e-3 * norm_pts[q].tau);
