@@ -62,7 +62,18 @@ for s in seeds:
     if not os.path.exists(f):
         continue
     j = json.load(open(f))
-    y = j["yield_locus"]
+    # the evaluation of the measured shear points (the default), in any summary.json format
+    if "yield_locus_raw" in j or j.get("normalized_points"):
+        # older reports (measured points under yield_locus_raw) or normalize_points = true: the
+        # other evaluation holds phi_lin, c, sigma_c, ffc only; sigma_1 = ffc sigma_c
+        y = dict(j.get("yield_locus_raw") or j["yield_locus_measured_points"])
+        if "error" not in y:
+            finite = not isinstance(y["ffc"], str)
+            sp, tp = j["pre_shear"]["sigma"], j["pre_shear"]["tau"]
+            y.update(sigma_1=y["ffc"] * y["sigma_c"] if finite else math.nan, phi_e_deg=math.nan,
+                     phi_sf_deg=math.degrees(math.atan2(tp, sp)))
+    else:
+        y = j["yield_locus"]
     if "error" in y:
         print(f"seed {s}: evaluation failed: {y['error']}")
         continue

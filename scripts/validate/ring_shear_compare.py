@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Several ring shear runs side by side (random fillings, cells): a Markdown table of each
+run's measured shear points and yield locus, the mean and sample standard deviation of the
+friction angle per group, and one figure with every run's shear points and least-squares
+locus. A group is the folder above the runs (e.g. out/validate/ring_shear/copper_ore_5pct).
+Usage: ring_shear_compare.py OUT.png RUN_DIR...   (RUN_DIR holds summary.json and shear_points.csv)
+Example (docs/ring-shear.md):
+  ring_shear_compare.py docs/img/ring_shear_5pct_seeds.png out/validate/ring_shear/copper_ore_5pct/seed_* \\
+      out/validate/ring_shear/copper_ore_5pct_annulus/seed_1"""
+import csv, json, math, os, statistics, subprocess, sys, tempfile
+
+if len(sys.argv) < 3:
+    print(__doc__); sys.exit(2)
+png, runs = sys.argv[1], sys.argv[2:]
+tmp = tempfile.mkdtemp()
+
+
+def measured_locus(j):
+    """The evaluation of the measured (not normalized) shear points, in any summary.json format."""
+    if "yield_locus_raw" in j:  # reports written before normalize_points existed
+        return j["yield_locus_raw"]
+    return j["yield_locus_measured_points"] if j.get("normalized_points") else j["yield_locus"]
+
+
+groups, plots = {}, []
+print("| run | cell | particles | shear points (sigma, tau), kPa | phi_lin, deg | c, kPa | ffc | pre-shear tau first -> last, kPa | CPU (or wall), min |")
+print("|---|---|---:|---|---:|---:|---:|---|---:|")
+for k, run in enumerate(runs):
+    j = json.load(open(os.path.join(run, "summary.json")))
+    pts = list(csv.DictReader(open(os.path.join(run, "shear_points.csv"))))
+    xs = [1e-3 * float(p["sigma"]) for p in pts]
+    ys = [1e-3 * float(p["tau_measured"]) for p in pts]
+    n = len(xs); mx = sum(xs) / n; my = sum(ys) / n
+    m = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+    c = my - m * mx
+    phi = math.degrees(math.atan(m))
+    y = measured_locus(j)
+    ffc = "-" if "error" in y else (y["ffc"] if isinstance(y["ffc"], str) else f'{y["ffc"]:.2f}')
+    group = os.path.basename(os.path.dirname(os.path.abspath(run)))
+    name = f"{group}/{os.path.basename(os.path.abspath(run))}"
+    groups.setdefault(group, []).append(phi)
+    tau_each = j["pre_shear"]["tau_each"]
+    print(f"| {name} | {j['cell']} | {j['particles']} | " + " ".join(f"({x:.1f}, {t:.1f})" for x, t in zip(xs, ys)) +
+          f" | {phi:.1f} | {c:.1f} | {ffc} | {1e-3*tau_each[0]:.1f} -> {1e-3*tau_each[-1]:.1f} | {j.get('cpu_time_s', j['wall_time_s'])/60:.0f} |")
+    with open(os.path.join(tmp, f"{k}.dat"), "w") as f:
+        for x, t in zip(xs, ys): f.write(f"{x} {t}\n")
+    plots.append((k, name, m, c, phi))
+print()
+for g, v in groups.items():
+    sd = statistics.stdev(v) if len(v) > 1 else float("nan")
+    print(f"{g}: phi_lin mean {statistics.mean(v):.1f} deg, std {sd:.1f} deg, min {min(v):.1f}, max {max(v):.1f} (n = {len(v)})")
+xmax = 1.15 * max(max(1e-3 * float(p["sigma"]) for p in csv.DictReader(open(os.path.join(r, "shear_points.csv")))) for r in runs)
+cmds = []
+for k, name, m, c, phi in plots:
+    cmds.append(f"'{tmp}/{k}.dat' w p pt 7 lc {k+1} t '{name}: {phi:.1f} deg'")
+    cmds.append(f"{m}*x+{c} w l lc {k+1} notitle")
+gp = f"""set terminal pngcairo size 800,560 font ',10' noenhanced
+set output '{png}'
+set title 'measured shear points and least-squares yield loci'
+set xlabel 'normal stress (kPa)'; set ylabel 'shear stress (kPa)'; set grid; set key left top
+set xrange [0:{xmax}]; set yrange [0:*]
+plot {", ".join(cmds)}
+"""
+subprocess.run(["gnuplot"], input=gp, text=True, check=True)
+print("figure:", png)
