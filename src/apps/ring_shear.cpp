@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -23,7 +24,7 @@ namespace cohdem {
 
 namespace fs = std::filesystem;
 
-RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& materials) {
+RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& materials, const std::vector<double>& densities) {
   RingShearSpec r;
   r.line = s.line();
   auto mat = [&](const std::string& key) {
@@ -56,7 +57,24 @@ RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& mater
   if (r.fractions.size() < 2) s.fail("fractions", "at least two shear points are needed for a yield locus");
   for (double f : r.fractions)
     if (!(f > 0 && f < 1)) s.fail("fractions", "each fraction of sigma_pre must be in (0, 1)");
+  // Shear speed: given, or the fastest that keeps the inertial number at the lowest shear
+  // point (the most demanding) at inertial_number_max; when both are given, checked.
+  r.inertial_number_max = s.num("inertial_number_max", 0.0, 0, 1, false, "");
+  const bool speed_given = s.has("shear_velocity");
   r.shear_velocity = s.num("shear_velocity", 0.02, 0, kInf, true, "m/s");
+  if (r.inertial_number_max > 0) {
+    const double rho = densities.at(size_t(r.material));
+    const double sig_low = *std::min_element(r.fractions.begin(), r.fractions.end()) * r.sigma_pre;
+    const double v_max = r.shear_velocity / ring_shear_inertial_number(r.shear_velocity, sig_low, rho) * r.inertial_number_max;
+    if (!speed_given) {
+      r.shear_velocity = v_max;
+    } else if (ring_shear_inertial_number(r.shear_velocity, sig_low, rho) > r.inertial_number_max * (1 + 1e-9)) {
+      s.fail("shear_velocity", fmt::format("{} m/s gives an inertial number of {:.3g} at the lowest shear point ({:.4g} Pa), above "
+                                           "inertial_number_max = {:.3g}: at most {:.4g} m/s (or leave shear_velocity out)",
+                                           r.shear_velocity, ring_shear_inertial_number(r.shear_velocity, sig_low, rho), sig_low,
+                                           r.inertial_number_max, v_max));
+    }
+  }
   r.lid_mass = s.num("lid_mass", 0.0, 0, kInf, false, "kg");
   r.tau_window = s.num("tau_window", 0.0005, 0, kInf, false, "m");
   r.consolidate_time = s.num("consolidate_time", 0.05, 0, kInf, false, "s");
@@ -318,8 +336,9 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
                  opt.max_wall_time, stage, stages, s.time, (out / "checkpoint.bin").string());
     return true;
   };
-  spdlog::info("ring shear ({}): {} particles + {} in rough layers, area {:.4g} m^2, sigma_pre {:.4g} Pa, dt {:.3g} s",
-               r.cell, n_free, n_fixed, area, r.sigma_pre, c.cfg.dt);
+  spdlog::info("ring shear ({}): {} particles + {} in rough layers, area {:.4g} m^2, sigma_pre {:.4g} Pa, dt {:.3g} s, shear at {:.4g} m/s{}",
+               r.cell, n_free, n_fixed, area, r.sigma_pre, c.cfg.dt, r.shear_velocity,
+               r.inertial_number_max > 0 ? fmt::format(" (inertial number at most {:.3g})", r.inertial_number_max) : std::string());
 
   // --- Measurements ------------------------------------------------------------------------
   Wall* L = &s.walls[lid_idx];
@@ -556,10 +575,12 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   const double d50 = 2 * std::cbrt(r.size.mean_volume() * 3 / (4 * M_PI));
   const double rho_p = c.materials[r.material].density;
   const double h_band = 10 * d50;
-  const double sig_low = r.fractions.front() * r.sigma_pre;
+  const double sig_low = *std::min_element(r.fractions.begin(), r.fractions.end()) * r.sigma_pre;
   j["inertial_number"] = {{"shear_band_thickness", h_band},
-                          {"at_sigma_pre", r.shear_velocity / h_band * d50 / std::sqrt(r.sigma_pre / rho_p)},
-                          {"at_lowest_shear_point", r.shear_velocity / h_band * d50 / std::sqrt(sig_low / rho_p)}};
+                          {"shear_velocity", r.shear_velocity},
+                          {"limit", r.inertial_number_max > 0 ? nlohmann::json(r.inertial_number_max) : nlohmann::json(nullptr)},
+                          {"at_sigma_pre", ring_shear_inertial_number(r.shear_velocity, r.sigma_pre, rho_p)},
+                          {"at_lowest_shear_point", ring_shear_inertial_number(r.shear_velocity, sig_low, rho_p)}};
   YieldLocusResult yl;
   bool evaluated = false;
   std::string eval_error;

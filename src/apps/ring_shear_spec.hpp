@@ -1,6 +1,7 @@
 // Settings of the virtual ring shear tester ([ring_shear] table of a case file; see
 // docs/ring-shear.md). Plain data, parsed in apps/ring_shear.cpp.
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@ struct RingShearSpec {
   double sigma_pre = 0;             ///< consolidation (pre-shear) normal stress, Pa
   std::vector<double> fractions{0.2, 0.4, 0.6, 0.8};  ///< shear points, fractions of sigma_pre
   double shear_velocity = 0.02;     ///< lid speed (annulus: at the mean radius), m/s
+  double inertial_number_max = 0;   ///< > 0: shear_velocity from this limit (or checked against it)
   double lid_mass = 0;              ///< kg of the floating lid (0: the sample's mass)
   double tau_window = 0.0005;       ///< m of shear displacement over which tau is averaged
   double consolidate_time = 0.05;   ///< s under sigma_pre before the first pre-shear
@@ -43,7 +45,15 @@ struct RingShearSpec {
   int line = 0;                     ///< of [ring_shear], for errors
 };
 
-/// Parses [ring_shear] (strict). `materials` names the case's materials in order.
-RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& materials);
+/// Inertial number of the shear, I = gamma_dot d / sqrt(sigma / rho_p), with the shear rate
+/// taken over a shear band of 10 mean diameters (gamma_dot = v / (10 d)): I = v / (10
+/// sqrt(sigma / rho_p)), independent of d.
+inline double ring_shear_inertial_number(double v, double sigma, double rho_p) {
+  return v / (10.0 * std::sqrt(sigma / rho_p));
+}
+
+/// Parses [ring_shear] (strict). `materials` names the case's materials in order,
+/// `densities` gives their particle densities (kg/m^3, for the inertial-number limit).
+RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& materials, const std::vector<double>& densities);
 
 }  // namespace cohdem

@@ -452,8 +452,9 @@ Case parse(toml::table& root, const std::string& file) {
   }
   if (auto rs = top.table("ring_shear")) {
     std::vector<std::string> names;
-    for (const auto& m : c.materials) names.push_back(m.name);
-    c.ring_shear = parse_ring_shear(*rs, names);
+    std::vector<double> densities;
+    for (const auto& m : c.materials) { names.push_back(m.name); densities.push_back(m.density); }
+    c.ring_shear = parse_ring_shear(*rs, names, densities);
   }
   if (c.inserts.empty() && c.particles.empty() && !c.ring_shear)
     top.fail("insert", "the case has no particles: add an [[insert]] or [[particle]]");
