@@ -17,6 +17,7 @@
 // scatter of a cell this small (a few kPa, up to 0.05-0.1 sigma_pre), the strong one far
 // outside it. The margins are set from that.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -54,7 +55,7 @@ struct Outcome {
 
 Outcome run(double kadh) {
   const Case c = load_case_text(case_text(kadh), "<ring shear trend test>");
-  const auto out = std::filesystem::temp_directory_path() / ("cohdem_ring_shear_trend_" + std::to_string(kadh));
+  const auto out = std::filesystem::temp_directory_path() / ("cohdem_ring_shear_trend_" + std::to_string(kadh) + "_" + std::to_string(::getpid()));
   RunOptions o;
   o.out_dir = out.string();
   o.quiet = true;

@@ -5,6 +5,8 @@
 // motion; 1500 steps span several rebuilds).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 
 #include "../physics/fixture.hpp"
@@ -70,7 +72,9 @@ void restart_is_bitwise(StopAt where) {
       break;
   }
   ASSERT_GT(a->pair_contact_count(), 50u);
-  const auto path = std::filesystem::temp_directory_path() / "cohdem_test_checkpoint.bin";
+  // One file per test and process: ctest runs these tests side by side.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("cohdem_test_checkpoint_" + std::to_string(int(where)) + "_" + std::to_string(::getpid()) + ".bin");
   const std::string app("app\0state", 9);  // opaque bytes, zeros included
   write_checkpoint(path, *a, app);
   const uint64_t at = a->step;
@@ -102,7 +106,7 @@ TEST(Checkpoint, RejectsOtherModelAndTruncation) {
   auto a = setup();
   a->add_particle(0, 5e-4, {0.005, 0, 0.001});
   a->prepare();
-  const auto path = std::filesystem::temp_directory_path() / "cohdem_test_checkpoint2.bin";
+  const auto path = std::filesystem::temp_directory_path() / ("cohdem_test_checkpoint2_" + std::to_string(::getpid()) + ".bin");
   write_checkpoint(path, *a);
   auto other = make_system({{"glass", 2500, 1e7, 0.25}}, "linear", "none",
                            params({{"kn", 1e3}, {"e", 0.5}, {"mu", 0.5}}), 2e-6);
