@@ -2,7 +2,8 @@
 # Ring shear validation: runs ring shear cases for several random fillings (seeds), a few at a
 # time (one thread each), then tabulates every seed's yield-locus results with the median and
 # the scatter:
-#   OUT/CASE_NAME/seed_S/          the run's report (summary.json, series.csv, PNG plots)
+#   OUT/CASE_NAME/seed_S/          the run's report (summary.json, series.csv, PNG plots) and
+#                                  case.toml, the copy of the case it ran
 #   OUT/CASE_NAME/results.csv      one row per seed
 #   OUT/CASE_NAME/summary.txt      median, min, max and standard deviation over the seeds
 # Usage:
@@ -30,7 +31,10 @@ done
 run_one() {  # case seed dir
   local c=$1 seed=$2 dir=$3 t0=$SECONDS
   mkdir -p "$dir"
-  if "$bin" run "$c" --set simulation.seed="$seed" --set simulation.threads=1 ${extra[@]+"${extra[@]}"} \
+  # Run a copy kept with the results: the report stays tied to the case it came from, and
+  # editing the example during an hour-long run cannot affect the runs still queued.
+  cp "$c" "$dir/case.toml"
+  if "$bin" run "$dir/case.toml" --set simulation.seed="$seed" --set simulation.threads=1 ${extra[@]+"${extra[@]}"} \
        --out "$dir" --quiet > "$dir/log.txt" 2>&1; then
     echo "seed $seed of $(basename "$c"): done in $((SECONDS - t0)) s"
   else
