@@ -65,7 +65,7 @@ RingShearSpec parse_ring_shear(Section& s, const std::vector<std::string>& mater
   if (r.inertial_number_max > 0) {
     const double rho = densities.at(size_t(r.material));
     const double sig_low = *std::min_element(r.fractions.begin(), r.fractions.end()) * r.sigma_pre;
-    const double v_max = r.shear_velocity / ring_shear_inertial_number(r.shear_velocity, sig_low, rho) * r.inertial_number_max;
+    const double v_max = r.inertial_number_max / ring_shear_inertial_number(1.0, sig_low, rho);  // I is linear in v
     if (!speed_given) {
       r.shear_velocity = v_max;
     } else if (ring_shear_inertial_number(r.shear_velocity, sig_low, rho) > r.inertial_number_max * (1 + 1e-9)) {
@@ -273,8 +273,6 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     j["sheared"] = sheared;
     j["phase"] = phase;
     j["free_mass"] = free_mass;
-    j["n_fixed"] = n_fixed;
-    j["n_free"] = n_free;
     j["wall_s"] = wall_before + std::chrono::duration<double>(clock::now() - t_wall0).count();
     j["cpu_s"] = cpu_before + double(std::clock()) / CLOCKS_PER_SEC;
     auto& js = j["series"] = nlohmann::json::array();
@@ -308,8 +306,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     sheared = j["sheared"];
     phase = j["phase"];
     free_mass = j["free_mass"];
-    n_fixed = j["n_fixed"];
-    n_free = j["n_free"];
+    n_free = size_t(std::count(s.particles.flag.begin(), s.particles.flag.end(), uint8_t(kFree)));
+    n_fixed = s.particles.size() - n_free;  // the glued layers
     wall_before = j["wall_s"];
     cpu_before = j["cpu_s"];
     for (const auto& q : j["series"])
