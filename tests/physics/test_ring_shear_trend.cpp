@@ -12,10 +12,21 @@
 // - shear at 0.15 m/s: inertial number ~1e-2 at the consolidation stress.
 // Levels: kadh = 0, 0.25 k1 and 0.75 k1 (0.75 k1 is the 5% ore's ratio kadh/k1). A contact
 // unloaded from a load F reaches a tensile force of F kadh (k2 - k1) / (k1 (k2 + kadh)):
-// 0, 0.19 F and 0.52 F. Measured (seed 3, measured shear points): c = -1.9, 4.5 and 30.4 kPa,
-// ffc = inf, 5.5 and 1.2, phi_lin = 32.8, 32.7 and 20.1 deg: the weak level lies within the
-// scatter of a cell this small (a few kPa, up to 0.05-0.1 sigma_pre), the strong one far
-// outside it. The margins are set from that.
+// 0, 0.19 F and 0.52 F.
+//
+// What a cell this small measures robustly. Its shear stress swings by +-50% during a
+// pre-shear (stick-slip of 255 particles), so a round-off change (another compiler, a
+// reordered sum) gives another realization of the test. The scatter over realizations was
+// measured with four fillings (seeds 3-6) of each level (kPa; sigma_pre = 54.8 kPa):
+//   level         c (3-point fit)    ffc          tau at 0.25 sigma_pre   mean tau of the 3 points
+//   kadh = 0      -6.9 .. +4.9       7.0 .. inf   4.7 .. 9.6              15.7 .. 19.1
+//   0.25 k1       -5.5 .. +3.5       6.7 .. inf   9.7 .. 15.4             21.6 .. 25.4
+//   0.75 k1       +5.3 .. +30.4      1.2 .. 4.2   21.9 .. 36.9            32.1 .. 39.6
+// (the 0.75 k1 row includes a fifth realization: seed 3 before a round-off change, c = 30.4).
+// The fitted cohesion scatters by +-6 kPa, so the trend is asserted on the height of the
+// locus (mean normalized tau of the three shear points) and on tau at the lowest normal
+// stress, which separate the levels by more than their scatter; the cohesion and ffc only
+// on the side the scatter cannot cross.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -51,6 +62,8 @@ std::string case_text(double kadh) {
 
 struct Outcome {
   double c = NAN, ffc = NAN, phi = NAN;
+  double tau_low = NAN;   ///< normalized tau of the shear point at the lowest normal stress, Pa
+  double tau_mean = NAN;  ///< mean normalized tau of the shear points (height of the locus), Pa
 };
 
 Outcome run(double kadh) {
@@ -70,6 +83,15 @@ Outcome run(double kadh) {
   r.c = yl["cohesion"].get<double>();
   r.ffc = yl["ffc"].is_string() ? INFINITY : yl["ffc"].get<double>();
   r.phi = yl["phi_lin_deg"].get<double>();
+  const auto& pts = j["shear_points"];
+  EXPECT_EQ(pts.size(), 3u) << "kadh " << kadh;
+  double sum = 0, sig_low = INFINITY;
+  for (const auto& q : pts) {
+    const double sig = q["sigma"].get<double>(), tau = q["tau_normalized"].get<double>();
+    sum += tau;
+    if (sig < sig_low) { sig_low = sig; r.tau_low = tau; }
+  }
+  r.tau_mean = pts.empty() ? NAN : sum / double(pts.size());
   // Momentum balance of the periodic sample along the shear direction: the lid's and the
   // base's shear forces differ by the rate of change of the sample's momentum. Over the last
   // quarter of a pre-shear (T >= 0.0064 m / 4 / 0.15 m/s = 10.7 ms) that averages to at most
@@ -81,8 +103,9 @@ Outcome run(double kadh) {
     const double lid = pre["tau_each"][q].get<double>(), base = pre["tau_base_each"][q].get<double>();
     EXPECT_NEAR(base, lid, 0.05 * lid + 520) << "kadh " << kadh << ", pre-shear " << q + 1 << ": base and lid shear stresses";
   }
-  std::printf("[validation] ring shear trend: kadh = %.3g N/m^1.5: phi_lin = %.1f deg, c = %.2f kPa, ffc = %.2f\n", kadh,
-              r.phi, r.c / 1e3, r.ffc);
+  std::printf("[validation] ring shear trend: kadh = %.3g N/m^1.5: phi_lin = %.1f deg, c = %.2f kPa, ffc = %.2f, "
+              "tau at the lowest sigma %.2f kPa, mean tau %.2f kPa\n", kadh, r.phi, r.c / 1e3, r.ffc, r.tau_low / 1e3,
+              r.tau_mean / 1e3);
   return r;
 }
 
@@ -94,18 +117,24 @@ TEST(RingShearTrend, CohesionlessHasNoInterceptAndAdhesionRaisesCohesionLowersFf
   auto a = std::async(std::launch::async, run, 0.0), b = std::async(std::launch::async, run, 0.25 * k1),
        w = std::async(std::launch::async, run, 0.75 * k1);
   const Outcome dry = a.get(), mid = b.get(), wet = w.get();
-  // kadh = 0: cohesion intercept near zero (within 0.1 sigma_pre = 5.5 kPa) and a
-  // free-flowing ffc (> 10, "free flowing" in Jenike's classification).
-  EXPECT_LT(std::abs(dry.c), 0.1 * sigma_pre);
-  EXPECT_GT(dry.ffc, 10.0);
-  // Raising kadh raises the cohesion and lowers ffc (not decreasing / increasing within the
-  // scatter at the weak level; clearly at the strong one).
-  EXPECT_GT(mid.c, dry.c - 0.1 * sigma_pre);
-  EXPECT_GT(wet.c, mid.c + 0.15 * sigma_pre);
-  EXPECT_LE(wet.ffc, mid.ffc);
-  EXPECT_LT(wet.ffc, 4.0);  // cohesive (ffc < 4, Jenike)
-  // The cohesionless friction angle of spheres with mu = 0.35 and rolling resistance: 25 to
-  // 45 degrees (sphere packings with rolling resistance reach 30-40).
+  // Adhesion raises the whole yield locus: its height grows with kadh at each step (measured
+  // gaps between levels 2.5 and 6.7 kPa at the least, worst pairing of fillings: asserted
+  // > 0 and > 0.05 sigma_pre = 2.7 kPa), and at the lowest normal stress the strong level
+  // shears at far more than the cohesionless one (gap >= 12.3 kPa measured: asserted
+  // > 0.15 sigma_pre = 8.2 kPa).
+  EXPECT_GT(mid.tau_mean, dry.tau_mean);
+  EXPECT_GT(wet.tau_mean, mid.tau_mean + 0.05 * sigma_pre);
+  EXPECT_GT(wet.tau_low, dry.tau_low + 0.15 * sigma_pre);
+  // kadh = 0: the cohesion intercept is zero within the scatter of the fit (|c| <= 6.9 kPa
+  // measured: asserted < 0.15 sigma_pre = 8.2 kPa).
+  EXPECT_LT(std::abs(dry.c), 0.15 * sigma_pre);
+  // 0.75 k1: cohesive, on the side the scatter never crossed (c >= 5.3 kPa, ffc <= 4.2).
+  EXPECT_GT(wet.c, 0.0);
+  EXPECT_LT(wet.ffc, 6.0);
+  EXPECT_LT(wet.ffc, dry.ffc);
+  // The cohesionless friction angle of spheres with mu = 0.35 and rolling resistance
+  // (sphere packings with rolling resistance reach 30-40 degrees; measured 27.5-38.6 over
+  // the four fillings): 25 to 45 degrees.
   EXPECT_GT(dry.phi, 25.0);
   EXPECT_LT(dry.phi, 45.0);
 }
