@@ -103,9 +103,9 @@ void BM_Force(benchmark::State& st, ModelCase mc) {
   }
   // Load the histories: a few real steps.
   s->run(5);
-  std::vector<Vec3> fp, tip, tjp, fw, tww, cw;
-  fp.resize(s->nl.pair_count()); tjp.resize(fp.size());
-  ForceContext ctx{s->particles, s->nl, s->walls, s->cfg.dt, s->time, fp, tip, tjp, fw, tww, cw};
+  std::vector<PairResult> pr(s->nl.pair_count());
+  std::vector<Vec3> fw, tww, cw;
+  ForceContext ctx{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, fw, tww, cw};
   for (auto _ : st) {
     s->model->compute(ctx);
     benchmark::DoNotOptimize(s->particles.force.data());

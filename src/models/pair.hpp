@@ -18,6 +18,10 @@ struct PairGeom {
   Vec3 vt;           ///< tangential relative velocity of the contact points (i relative to j), m/s
   Vec3 wrel;         ///< omega_i - omega_j, rad/s
   double dt = 0;     ///< time step, s
+  /// Whether NormalOut::a is read. The force loop clears it when nothing reads the contact
+  /// radius (no conduction, no contact output); a normal model whose a is only geometric
+  /// (sqrt(R* delta), not part of its force) may then leave a = 0 and skip the square root.
+  bool want_a = true;
 };
 
 /// Output of the normal sub-model, read by damping, tangential, rolling and twisting.

@@ -8,17 +8,20 @@
 
 namespace cohdem {
 
+/// Result of one pair entry that j receives: the force on i (j takes its opposite) and the
+/// torque on j. One record, so the gather of pass 2 touches one cache line, not two.
+struct PairResult {
+  Vec3 f, tj;
+};
+
 struct ForceContext {
   ParticleStore& p;
   NeighborList& nl;
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
-  // Per-pair results, valid where nl.hist.live[k]: the force on i (j gets its opposite) and
-  // the torque on j; the kernel sums i's side directly (ti_pair is kept for callers that
-  // want it but is not written by the bulk kernel).
-  std::vector<Vec3>& f_pair;
-  std::vector<Vec3>& ti_pair;
-  std::vector<Vec3>& tj_pair;
+  // Per-pair results (indexed like nl.jdx), valid where nl.hist.live[k]; i's side is summed
+  // straight into particle i.
+  std::vector<PairResult>& pair;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
   std::vector<Vec3>& f_wall;

@@ -14,6 +14,7 @@
 // order.
 #pragma once
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <omp.h>
@@ -22,6 +23,15 @@
 #include "sim/force_context.hpp"
 
 namespace cohdem {
+
+/// Rows ahead whose history and pair buffers are prefetched.
+inline constexpr long kPrefetchRows = 4;
+template <class T>
+inline void prefetch_range(const T* b, const T* e) {
+  const uintptr_t line = 64;
+  for (uintptr_t q = reinterpret_cast<uintptr_t>(b) & ~(line - 1); q < reinterpret_cast<uintptr_t>(e); q += line)
+    __builtin_prefetch(reinterpret_cast<const void*>(q), 1, 3);
+}
 
 /// Row entries screened per batch in the force loop (rows are usually far shorter).
 inline constexpr uint32_t kMaxRow = 64;
@@ -53,8 +63,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const int32_t* const __restrict species = P.species.data();
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
-  Vec3* const __restrict f_pair = c.f_pair.data();
-  Vec3* const __restrict tj_pair = c.tj_pair.data();
+  PairResult* const __restrict res = c.pair.data();
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
   Vec3* const __restrict c_wall = c.c_wall.data();
@@ -62,6 +71,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
+  const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
 
   // Pass 1 of row i.
   auto row = [&](const long i) __attribute__((always_inline)) {
@@ -70,6 +80,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     const int si = species[i];
     const bool fi = flag[i] == kFree;
     Vec3 F, T;
+    // The history and pair-result rows of a row a few ahead: touching entries are sparse
+    // (one in five or six), too sparse for the hardware prefetcher to follow.
+    if (i + kPrefetchRows < n) {
+      const uint32_t p0 = start[i + kPrefetchRows], p1 = start[i + kPrefetchRows + 1];
+      prefetch_range(hs + p0, hs + p1);
+      prefetch_range(res + p0, res + p1);
+    }
     // Most list entries are not in contact (the skin): pick the touching or live ones first,
     // without branches, so the loads of all entries overlap and no branch mispredicts.
     uint32_t hit[kMaxRow];  // plain arrays: no per-row zero fill
@@ -109,7 +126,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       g.mj = fj ? mass[j] : inf;
       g.Ii = fi ? inertia[i] : inf;
       g.Ij = fj ? inertia[j] : inf;
-      g.mstar = 1.0 / ((fi ? 1.0 / g.mi : 0.0) + (fj ? 1.0 / g.mj : 0.0));
+      // m* = mi mj / (mi + mj), one division; a frozen partner counts as infinitely heavy
+      // (two frozen particles: m* = inf).
+      g.mstar = fi && fj ? g.mi * g.mj / (g.mi + g.mj) : (fi ? g.mi : g.mj);
       const Vec3 vij = v[i] - v[j];
       g.vn = dot(vij, g.n);
       const double li = ri - 0.5 * g.delta, lj = rj - 0.5 * g.delta;
@@ -117,14 +136,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       g.vt = vrel - g.n * dot(vrel, g.n);
       g.wrel = omega[i] - omega[j];
       g.dt = dt;
+      g.want_a = want_a;
       PairForce out;
       const bool alive = Law::evaluate(p(si, species[j]), g, hs[k], out);
       live[k] = alive;
       if (alive) {
         F += out.f;
         T += out.ti;
-        f_pair[k] = out.f;
-        tj_pair[k] = out.tj;
+        res[k] = {out.f, out.tj};
         if (c.a_pair) c.a_pair[k] = out.a;
       }
       }
@@ -137,7 +156,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     Vec3 F = force[i], T = torque[i];
     for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
       const uint32_t k = rpair[q];
-      if (live[k]) { F -= f_pair[k]; T += tj_pair[k]; }
+      if (live[k]) { F -= res[k].f; T += res[k].tj; }
     }
     for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
       const Wall& w = walls[wall_of[e]];
@@ -162,6 +181,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       g.vt = vrel - g.n * dot(vrel, g.n);
       g.wrel = omega[i] - w.omega;
       g.dt = dt;
+      g.want_a = want_a_wall;
       PairForce out;
       const bool alive = Law::evaluate(p(species[i], w.material), g, ws[e], out);
       wlive[e] = alive;

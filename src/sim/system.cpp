@@ -202,7 +202,7 @@ void System::do_pours() {
 
 void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
-  if (f_pair_.size() < np) { f_pair_.resize(np); tj_pair_.resize(np); }  // ti_pair_: unused by the kernel
+  if (pair_.size() < np) pair_.resize(np);
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   const bool radii = thermal || cfg.record_contact_radii;
   if (radii) {
@@ -210,7 +210,7 @@ void System::compute_forces() {
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
   ctx.a_pair = radii ? a_pair_.data() : nullptr;
   ctx.a_wall = radii ? a_wall_.data() : nullptr;

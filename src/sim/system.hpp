@@ -12,6 +12,7 @@
 #include "neighbor/neighbor_list.hpp"
 #include "particles/insertion.hpp"
 #include "particles/particle_store.hpp"
+#include "sim/force_context.hpp"
 #include "walls/wall.hpp"
 
 namespace cohdem {
@@ -121,7 +122,7 @@ class System {
   // entries); valid where nl.hist.live / nl.whist.live. Forces act on the particle (pair: on i).
   // Contact radii are recorded only with a thermal model or SimConfig::record_contact_radii.
   /// Force on i of pair entry k (zero when not live).
-  Vec3 pair_force(size_t k) const { return nl.hist.live[k] ? f_pair_[k] : Vec3{}; }
+  Vec3 pair_force(size_t k) const { return nl.hist.live[k] ? pair_[k].f : Vec3{}; }
   const std::vector<double>& pair_contact_radii() const { return a_pair_; }
   const std::vector<Vec3>& wall_forces() const { return f_wall_; }
   const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
@@ -139,7 +140,8 @@ class System {
   bool has_pending_ = false;
   void install_pending();
   void prepare_reach();
-  std::vector<Vec3> f_pair_, ti_pair_, tj_pair_, f_wall_, tw_wall_, c_wall_;
+  std::vector<PairResult> pair_;
+  std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
   std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 

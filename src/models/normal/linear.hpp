@@ -17,7 +17,7 @@ struct LinearNormal : NormalBase {
     o.alive = g.delta > 0;
     o.f_el = p.kn * g.delta;
     o.kn = p.kn;
-    o.a = o.alive ? std::sqrt(g.rstar * g.delta) : 0.0;  // geometric contact radius
+    o.a = o.alive && g.want_a ? std::sqrt(g.rstar * g.delta) : 0.0;  // geometric contact radius
   }
 };
 

@@ -55,6 +55,13 @@ inline double powe(double d, double n) {
   if (n == 1.5) return d * std::sqrt(d);
   return std::pow(d, n);
 }
+/// d^(n-1) for d > 0, without pow or a division for the usual n = 1 and 3/2 (then d^n is
+/// d * pow_nm1(d, n), and the tangent n k d^(n-1) needs no d^n / d).
+inline double pow_nm1(double d, double n) {
+  if (n == 1.0) return 1.0;
+  if (n == 1.5) return std::sqrt(d);
+  return std::pow(d, n - 1.0);
+}
 
 /// An InputError about `key` of a parameter set, naming where the key was given.
 inline InputError param_error(const ParamSet& ps, const std::string& key, const std::string& what) {
@@ -124,7 +131,8 @@ struct HystereticNormal : NormalBase {
     o.alive = d > 0;
     if (!o.alive) return;
     const Stiff k = stiff(p, g.rstar);
-    const double D = powe(d, p.n);
+    const double dn1 = pow_nm1(d, p.n);
+    const double D = d * dn1;
     const double A = p.kadh * (p.x_is_n ? D : powe(d, p.x));  // adhesive bound magnitude
     const double k2 = k2_at(k, s.Dmax);
     const double f1 = k.k1 * D, f2 = k2 * (D - s.Dp);
@@ -147,8 +155,8 @@ struct HystereticNormal : NormalBase {
     }
     o.f_el = p.f0 + f;
     o.f_adh = A - p.f0;
-    o.kn = p.n * k.k2 * (D / d);
-    o.a = std::sqrt(g.rstar * d);
+    o.kn = p.n * k.k2 * dn1;
+    o.a = g.want_a ? std::sqrt(g.rstar * d) : 0.0;
   }
 
   template <class P>
@@ -276,7 +284,7 @@ struct HystTangential : TangentialCommon {
     const double k1 = N::k1_of(p.np, g.rstar);
     const double n = p.np.n;
     if (p.form == 2 || n == 1.0) return p.kt_ratio * k1;
-    const double dn1 = powe(std::max(g.delta, 0.0), n) / g.delta;  // delta^(n-1)
+    const double dn1 = g.delta > 0 ? pow_nm1(g.delta, n) : 0.0;  // delta^(n-1)
     return p.kt_ratio * k1 * dn1 * (p.form == 0 ? n : 1.0);
   }
   static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double gamma_n, double fc, State& s) {

@@ -52,10 +52,12 @@ struct EpsdRolling {
       return s.mk;
     }
     if (p.eta_r > 0) {
-      // A wall (or fixed particle) has I = inf and adds nothing; testing for it avoids
+      // I_r = Ji Jj / (Ji + Jj) with J = I + m r^2: one division. A wall (or fixed particle)
+      // has I = inf and adds nothing (I_r is the other body's J); testing for it avoids
       // m r^2 = inf * 0 = NaN for a wall (r_j = 0).
-      auto inv = [](double I, double m, double r) { return std::isinf(I) ? 0.0 : 1.0 / (I + m * r * r); };
-      const double Ir = 1.0 / (inv(g.Ii, g.mi, g.ri) + inv(g.Ij, g.mj, g.rj));
+      const bool wi = std::isinf(g.Ii), wj = std::isinf(g.Ij);
+      const double Ji = wi ? 0.0 : g.Ii + g.mi * g.ri * g.ri, Jj = wj ? 0.0 : g.Ij + g.mj * g.rj * g.rj;
+      const double Ir = wj ? Ji : (wi ? Jj : Ji * Jj / (Ji + Jj));
       return s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
     }
     return s.mk;
