@@ -145,7 +145,9 @@ void System::move_walls(double dt) {
     if (W.control != WallControl::Prescribed) W.travel += W.vn * dt;
   }
   // Particles carried by walls (ribs, glued rough layers) move rigidly with them.
+  if (walls.empty()) return;
   const long np = long(particles.size());
+#pragma omp parallel for schedule(static) if (np > cfg.parallel_min)
   for (long i = 0; i < np; ++i) {
     if (particles.flag[i] != kAttached) continue;
     const Wall& W = walls[particles.body[i]];
@@ -216,23 +218,37 @@ void System::compute_forces() {
   ctx.a_wall = radii ? a_wall_.data() : nullptr;
   model->compute(ctx);
 
-  // Wall totals in a fixed order (deterministic).
+  // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
+  // of particles (in particle order within a block), then the blocks in order.
   if (walls.empty()) return;
-  for (Wall& W : walls) { W.force = {}; W.torque = {}; }
-  const size_t n = particles.size();
-  for (size_t i = 0; i < n; ++i) {
-    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
-      if (!nl.whist.live[e]) continue;
-      Wall& W = walls[nl.wall[e]];
-      W.force -= f_wall_[e];
-      W.torque += cross(c_wall_[e] - W.center, -f_wall_[e]) + tw_wall_[e];
-    }
-    if (particles.flag[i] == kAttached) {
-      Wall& W = walls[particles.body[i]];
-      W.force += particles.force[i];
-      W.torque += cross(particles.x[i] - W.center, particles.force[i]) + particles.torque[i];
+  const long n = long(particles.size());
+  const size_t nwall = walls.size();
+  constexpr long kBlock = 4096;
+  const long nb = (n + kBlock - 1) / kBlock;
+  wall_part_.assign(size_t(nb) * nwall * 2, Vec3{});
+#pragma omp parallel for schedule(static) if (n > cfg.parallel_min)
+  for (long b = 0; b < nb; ++b) {
+    Vec3* part = wall_part_.data() + size_t(b) * nwall * 2;  // force, torque of each wall
+    for (long i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+      for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
+        if (!nl.whist.live[e]) continue;
+        const size_t w = nl.wall[e];
+        part[2 * w] -= f_wall_[e];
+        part[2 * w + 1] += cross(c_wall_[e] - walls[w].center, -f_wall_[e]) + tw_wall_[e];
+      }
+      if (particles.flag[i] == kAttached) {
+        const size_t w = particles.body[i];
+        part[2 * w] += particles.force[i];
+        part[2 * w + 1] += cross(particles.x[i] - walls[w].center, particles.force[i]) + particles.torque[i];
+      }
     }
   }
+  for (Wall& W : walls) { W.force = {}; W.torque = {}; }
+  for (long b = 0; b < nb; ++b)
+    for (size_t w = 0; w < nwall; ++w) {
+      walls[w].force += wall_part_[(size_t(b) * nwall + w) * 2];
+      walls[w].torque += wall_part_[(size_t(b) * nwall + w) * 2 + 1];
+    }
 }
 
 void System::step_once() {
