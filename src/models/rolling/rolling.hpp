@@ -37,12 +37,7 @@ struct EpsdRolling {
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0]), p.get(specs[1])}; }
   static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double fc, State& s) {
     const Vec3 wr = rolling_rate(g);
-    const double m0 = norm2(s.mk);
-    if (m0 > 0) {
-      s.mk -= g.n * dot(g.n, s.mk);
-      const double m1 = norm2(s.mk);
-      if (m1 > 0) s.mk *= std::sqrt(m0 / m1);
-    }
+    rotate_into_plane(s.mk, g.n);
     const double kr = 2.25 * no.kn * p.mu_r * p.mu_r * g.rstar * g.rstar;
     s.mk -= wr * (kr * g.dt);
     const double lim = p.mu_r * g.rstar * fc;

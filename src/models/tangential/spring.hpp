@@ -25,12 +25,7 @@ struct TangentialCommon {
   /// Shared history update; returns the tangential force on i.
   static Vec3 update(State& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {
     // 1. rotate into the tangent plane, keep magnitude
-    const double m0 = norm2(s.fs);
-    if (m0 > 0) {
-      s.fs -= g.n * dot(g.n, s.fs);
-      const double m1 = norm2(s.fs);
-      if (m1 > 0) s.fs *= std::sqrt(m0 / m1);
-    }
+    rotate_into_plane(s.fs, g.n);
     // 2. no energy from a stiffness drop
     if (s.kt_prev > 0 && kt < s.kt_prev) s.fs *= kt / s.kt_prev;
     s.kt_prev = kt;

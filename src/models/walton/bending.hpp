@@ -33,12 +33,7 @@ struct WaltonBending {
   /// set by the pull-off force.
   static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double /*fc*/, State& s) {
     const WaltonSpot sp = walton_spot(p.Y, p.sf, p.bf, p.c_theta, g.rstar, no.f_adh);
-    const double m0 = norm2(s.m);
-    if (m0 > 0) {  // rotate with the contact
-      s.m -= g.n * dot(g.n, s.m);
-      const double m1 = norm2(s.m);
-      if (m1 > 0) s.m *= std::sqrt(m0 / m1);
-    }
+    rotate_into_plane(s.m, g.n);  // turn with the contact
     const Vec3 wb = g.wrel - g.n * dot(g.n, g.wrel);
     s.m -= wb * (sp.k_theta * g.dt);
     const double m2 = norm2(s.m);
