@@ -103,9 +103,9 @@ void BM_Force(benchmark::State& st, ModelCase mc) {
   }
   // Load the histories: a few real steps.
   s->run(5);
-  std::vector<PairResult> pr(s->nl.pair_count());
+  std::vector<PairResult> pr(s->nl.pair_count()), rev(s->particles.size());
   std::vector<Vec3> fw, tww, cw;
-  ForceContext ctx{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, fw, tww, cw};
+  ForceContext ctx{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, rev, fw, tww, cw};
   for (auto _ : st) {
     s->model->compute(ctx);
     benchmark::DoNotOptimize(s->particles.force.data());

@@ -22,6 +22,9 @@ struct ForceContext {
   // Per-pair results (indexed like nl.jdx), valid where nl.hist.live[k]; i's side is summed
   // straight into particle i.
   std::vector<PairResult>& pair;
+  /// Per particle, one thread only: the sums of the pairs where it is j (force, torque),
+  /// scattered during the row sweep. At least as long as the particle arrays.
+  std::vector<PairResult>& rev;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
   std::vector<Vec3>& f_wall;

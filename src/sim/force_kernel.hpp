@@ -4,15 +4,19 @@
 //   free screening), then evaluated; the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
 //   and the torque on j) goes to per-pair buffers.
-// Pass 2 (particle i): adds the pair results where i is j, in the order of the transposed
-//   index, then i's wall contacts, then the body force.
+// Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
+//   order, adds that to i's own row sum, then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
-// count. One parallel region: each thread runs pass 1 over a contiguous block of particles
-// and pass 2 of each particle as soon as the rows it depends on are done (while the pair
-// results are still in cache); particles that depend on another block wait for the single
-// barrier. Only WHEN pass 2 runs depends on the thread count, never what it sums or in which
-// order.
+// count. Several threads: one parallel region; each thread runs pass 1 over a contiguous
+// block of particles and pass 2 of each particle as soon as the rows it depends on are done
+// (while the pair results are still in cache), gathering the reverse sums through the
+// transposed index; particles that depend on another block wait for the single barrier.
+// One thread: the row sweep scatters j's share straight into j's reverse sums (in ascending
+// list order, as the gather would add them), so pass 2 needs no walk over the transposed
+// index. Only WHEN pass 2 runs and how the reverse sums are collected depend on the thread
+// count, never what is summed or in which order.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -74,7 +78,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
 
   // Pass 1 of row i.
-  auto row = [&](const long i) __attribute__((always_inline)) {
+  PairResult* const __restrict rev = c.rev.data();
+  auto row = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
     const Vec3 xi = x[i];
     const double ri = radius[i];
     const int si = species[i];
@@ -144,6 +149,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         F += out.f;
         T += out.ti;
         res[k] = {out.f, out.tj};
+        if constexpr (kScatter) {  // one thread: j's share straight into its reverse sums
+          rev[j].f -= out.f;
+          rev[j].tj += out.tj;
+        }
         if (c.a_pair) c.a_pair[k] = out.a;
       }
       }
@@ -152,12 +161,21 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     torque[i] = T;
   };
   // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
-  auto finish = [&](const long i) __attribute__((always_inline)) {
-    Vec3 F = force[i], T = torque[i];
-    for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
-      const uint32_t k = rpair[q];
-      if (live[k]) { F -= res[k].f; T += res[k].tj; }
+  auto finish = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
+    // The pairs where i is j, summed on their own in ascending list order (the order of
+    // rpair, and the order in which a single thread's row sweep scatters them), then added
+    // to i's own row sum: the same operations whichever way they were gathered.
+    Vec3 R, RT;
+    if constexpr (kScatter) {
+      R = rev[i].f;
+      RT = rev[i].tj;
+    } else {
+      for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
+        const uint32_t k = rpair[q];
+        if (live[k]) { R -= res[k].f; RT += res[k].tj; }
+      }
     }
+    Vec3 F = force[i] + R, T = torque[i] + RT;
     for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
       const Wall& w = walls[wall_of[e]];
       PairGeom g;
@@ -214,15 +232,27 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.
     long next = a;
-    for (long i = a; i < b; ++i) {
-      row(i);
-      for (; next <= i && long(dep_hi[next]) <= i; ++next)
-        if (long(dep_lo[next]) >= a) finish(next);
-    }
+    if (nt == 1) {
+      // One thread: the reverse sums are scattered during the row sweep (no second walk
+      // over the transposed index); a particle is finished once the last row holding one
+      // of its pairs is done.
+      std::fill(rev, rev + n, PairResult{});
+      for (long i = 0; i < n; ++i) {
+        row.template operator()<true>(i);
+        for (; next <= i && long(dep_hi[next]) <= i; ++next) finish.template operator()<true>(next);
+      }
+      for (long q = next; q < n; ++q) finish.template operator()<true>(q);
+    } else {
+      for (long i = a; i < b; ++i) {
+        row.template operator()<false>(i);
+        for (; next <= i && long(dep_hi[next]) <= i; ++next)
+          if (long(dep_lo[next]) >= a) finish.template operator()<false>(next);
+      }
 #pragma omp barrier
-    for (long q = a; q < next; ++q)
-      if (long(dep_lo[q]) < a) finish(q);
-    for (long q = next; q < b; ++q) finish(q);
+      for (long q = a; q < next; ++q)
+        if (long(dep_lo[q]) < a) finish.template operator()<false>(q);
+      for (long q = next; q < b; ++q) finish.template operator()<false>(q);
+    }
   }
 }
 

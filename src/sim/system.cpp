@@ -205,6 +205,7 @@ void System::do_pours() {
 void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   if (pair_.size() < np) pair_.resize(np);
+  if (rev_.size() < particles.size()) rev_.resize(particles.size());
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   const bool radii = thermal || cfg.record_contact_radii;
   if (radii) {
@@ -212,7 +213,7 @@ void System::compute_forces() {
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
+  ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
   ctx.a_pair = radii ? a_pair_.data() : nullptr;
   ctx.a_wall = radii ? a_wall_.data() : nullptr;

@@ -140,7 +140,7 @@ class System {
   bool has_pending_ = false;
   void install_pending();
   void prepare_reach();
-  std::vector<PairResult> pair_;
+  std::vector<PairResult> pair_, rev_;
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
   std::vector<Vec3> wall_part_;  ///< per block of particles: force and torque on each wall
   std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
