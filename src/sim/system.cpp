@@ -133,6 +133,7 @@ void System::install_pending() {
 }
 
 void System::move_walls(double dt) {
+  wall_dx_.resize(walls.size());
   for (size_t w = 0; w < walls.size(); ++w) {
     Wall& W = walls[w];
     const double w0 = 2 * M_PI * W.osc_frequency;
@@ -140,6 +141,7 @@ void System::move_walls(double dt) {
                          ? W.osc_dir * (W.osc_amplitude * (std::sin(w0 * (time + dt)) - std::sin(w0 * time)))
                          : Vec3{};
     const Vec3 dx = W.velocity * dt + W.normal * (W.vn * dt) + osc;
+    wall_dx_[w] = dx;
     W.point += dx;
     W.center += dx;
     if (W.control != WallControl::Prescribed) W.travel += W.vn * dt;
@@ -153,11 +155,7 @@ void System::move_walls(double dt) {
     const Wall& W = walls[particles.body[i]];
     const double wn = norm(W.omega);
     Vec3 x = particles.x[i];
-    const double w0 = 2 * M_PI * W.osc_frequency;
-    const Vec3 osc = W.osc_amplitude != 0
-                         ? W.osc_dir * (W.osc_amplitude * (std::sin(w0 * (time + dt)) - std::sin(w0 * time)))
-                         : Vec3{};
-    const Vec3 dx = W.velocity * dt + W.normal * (W.vn * dt) + osc;
+    const Vec3 dx = wall_dx_[size_t(particles.body[i])];  // the wall's translation this step
     // W.center has already moved by dx: rotate about the old centre, then translate.
     if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
     particles.x[i] = x + dx;

@@ -143,6 +143,7 @@ class System {
   std::vector<PairResult> pair_, rev_;
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
   std::vector<Vec3> wall_part_;  ///< per block of particles: force and torque on each wall
+  std::vector<Vec3> wall_dx_;    ///< translation of each wall in the current step (move_walls)
   std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 
