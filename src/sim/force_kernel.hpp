@@ -68,6 +68,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
   PairResult* const __restrict res = c.pair.data();
+  PairResult* const __restrict rev = c.rev.data();  // one thread only
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
   Vec3* const __restrict c_wall = c.c_wall.data();
@@ -78,7 +79,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
 
   // Pass 1 of row i.
-  PairResult* const __restrict rev = c.rev.data();
   auto row = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
     const Vec3 xi = x[i];
     const double ri = radius[i];

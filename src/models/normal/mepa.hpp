@@ -50,11 +50,6 @@
 namespace cohdem {
 
 /// d^n with the common exponents exact and cheap (hot path).
-inline double powe(double d, double n) {
-  if (n == 1.0) return d;
-  if (n == 1.5) return d * std::sqrt(d);
-  return std::pow(d, n);
-}
 /// d^(n-1) for d > 0, without pow or a division for the usual n = 1 and 3/2 (then d^n is
 /// d * pow_nm1(d, n), and the tangent n k d^(n-1) needs no d^n / d).
 inline double pow_nm1(double d, double n) {
@@ -62,6 +57,8 @@ inline double pow_nm1(double d, double n) {
   if (n == 1.5) return std::sqrt(d);
   return std::pow(d, n - 1.0);
 }
+/// d^n for d >= 0.
+inline double powe(double d, double n) { return d > 0 ? d * pow_nm1(d, n) : 0.0; }
 
 /// An InputError about `key` of a parameter set, naming where the key was given.
 inline InputError param_error(const ParamSet& ps, const std::string& key, const std::string& what) {
