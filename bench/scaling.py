@@ -47,29 +47,27 @@ def main():
                            check=True, stdout=subprocess.DEVNULL)
             subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), data,
                             os.path.join(HERE, "packing.toml"), "-o", case, "--frozen", "", "--box", "xy"], check=True)
-    cases = {n: os.path.join(a.out, f"p{n}.toml") for n in sizes}
-    labels = {n: f"{n:,}" for n in sizes}
+    # Problems by key: the gas at each size, then (with --chute) the chute.
+    probs = [(f"p{n}", f"{n:,}", os.path.join(a.out, f"p{n}.toml")) for n in sizes]
     if a.chute:
         if not os.path.exists(a.chute_data):
             sys.exit(f"{a.chute_data} not found (--chute-data)")
         case = os.path.join(a.out, "chute.toml")
         subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), a.chute_data,
                         os.path.join(HERE, "chute.toml"), "-o", case], check=True)
-        sizes.append(32000)
-        cases[32000] = case
-        labels[32000] = "32,000 (chute)"
+        probs.append(("chute", "32,000 (chute)", case))
     best, allr = {}, {}
     for r in range(a.repeat):
-        for n in sizes:
+        for key, label, case in probs:
             for t in threads:
-                out = os.path.join(a.out, f"run_{n}_{t}")
-                subprocess.run([a.cohdem, "run", cases[n], "--set",
+                out = os.path.join(a.out, f"run_{key}_{t}")
+                subprocess.run([a.cohdem, "run", case, "--set",
                                 f"simulation.duration={a.steps * 1e-4!r}", "--threads", str(t), "--out", out, "--quiet"],
                                check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                 j = json.load(open(os.path.join(out, "summary.json")))
                 rate = j["particle_steps_per_s"]
-                print(f"  run {r + 1}: N = {n:8d}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
-                k = (n, t)
+                print(f"  run {r + 1}: {label:>16s}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
+                k = (key, t)
                 allr.setdefault(k, []).append(rate)
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
@@ -78,18 +76,19 @@ def main():
           f"{threads[-1]} threads / {threads[0]} (best, median) | contacts per particle | peak RSS of the run | bytes per particle |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     rows = []
-    for n in sizes:
+    for key, label, _ in probs:
         for t in threads:
-            j = best[(n, t)]
+            j = best[(key, t)]
+            n = j["particles"]
             rate = j["particle_steps_per_s"]
-            med = statistics.median(allr[(n, t)])
+            med = statistics.median(allr[(key, t)])
             sp = ""
-            if t != threads[0] and (n, threads[0]) in best:
-                sp = (f"{rate / best[(n, threads[0])]['particle_steps_per_s']:.2f}, "
-                      f"{med / statistics.median(allr[(n, threads[0])]):.2f}")
-            print(f"| {labels[n]} | {t} | {rate:.3g} | {med:.3g} | {1e9 / rate:.0f} | {sp} | {j['contacts'] / n:.2f} | "
+            if t != threads[0] and (key, threads[0]) in best:
+                sp = (f"{rate / best[(key, threads[0])]['particle_steps_per_s']:.2f}, "
+                      f"{med / statistics.median(allr[(key, threads[0])]):.2f}")
+            print(f"| {label} | {t} | {rate:.3g} | {med:.3g} | {1e9 / rate:.0f} | {sp} | {j['contacts'] / n:.2f} | "
                   f"{j['peak_rss_run_bytes'] / 2**20:.0f} MiB | {j['run_bytes_per_particle']:.0f} |")
-            rows.append({"problem": labels[n], "particles": n, "threads": t, "particle_steps_per_s": rate,
+            rows.append({"problem": label, "particles": n, "threads": t, "particle_steps_per_s": rate,
                          "median_particle_steps_per_s": med, "contacts": j["contacts"],
                          "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"]})
     with open(os.path.join(a.out, "scaling.json"), "w") as f:
