@@ -24,7 +24,7 @@ std::string out_folder(const BedOptions& o, const Case& c) { return o.out_dir.em
 
 std::unique_ptr<System> build_checked(const Case& c) {
   auto s = build_system(c);
-  s->cfg.record_contact_radii = true;  // the protocols write the contact network
+  s->cfg.record_contacts = true;  // the protocols write the contact network and measure stresses
   const auto a = audit_timestep(*s, min_radius_by_material(*s), audit_velocity(c));
   for (const auto& m : a.messages) spdlog::warn("time step: {}", m);
   if (a.level == TimestepAudit::Error)

@@ -498,7 +498,7 @@ Case parse(toml::table& root, const std::string& file) {
     c.output.vtk = s->boolean("vtk", true);
     c.output.checkpoint_interval = s->num("checkpoint_interval", 600.0, 0, kInf, false, "s");
     c.output.contacts = s->boolean("contacts", false);
-    c.cfg.record_contact_radii = c.output.contacts;  // the network shows each contact's radius
+    c.cfg.record_contacts = c.output.contacts;  // the network shows each contact's force and radius
     c.output.probes = s->strings("probes", std::vector<std::string>{});
     static const std::vector<std::string> known = {"kinetic_energy", "rotational_energy", "contacts",
                                                    "max_overlap", "mean_velocity", "max_velocity",

@@ -19,7 +19,7 @@ VtuData contact_network_vtu(const System& s) {
   const auto& ap = s.pair_contact_radii();
   const auto& aw = s.wall_contact_radii();
   if (ap.size() < nl.pair_count() || aw.size() < nl.wall_entry_count())
-    throw std::logic_error("contact_network_vtu: contact radii were not recorded (SimConfig::record_contact_radii)");
+    throw std::logic_error("contact_network_vtu: contact radii were not recorded (SimConfig::record_contacts)");
   for (size_t i = 0; i + 1 < nl.start.size(); ++i)
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
       if (!nl.hist.live[k]) continue;

@@ -34,6 +34,9 @@ struct ForceContext {
   Vec3 gravity{};
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
+  /// Store every live pair's result in `pair` even when one thread needs no gather (the
+  /// multi-thread gather always stores them).
+  bool keep_pair = true;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).
   double* a_pair = nullptr;

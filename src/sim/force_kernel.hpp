@@ -3,7 +3,8 @@
 // Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
 //   free screening), then evaluated; the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
-//   and the torque on j) goes to per-pair buffers.
+//   and the torque on j) goes to per-pair buffers (one thread: only when asked for,
+//   ForceContext::keep_pair; the row sweep scatters j's share itself).
 // Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
 //   order, adds that to i's own row sum, then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
@@ -77,6 +78,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
+  const bool keep_pair = c.keep_pair;
 
   // Pass 1 of row i.
   auto row = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
@@ -90,7 +92,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (i + kPrefetchRows < n) {
       const uint32_t p0 = start[i + kPrefetchRows], p1 = start[i + kPrefetchRows + 1];
       prefetch_range(hs + p0, hs + p1);
-      prefetch_range(res + p0, res + p1);
+      if (!kScatter || keep_pair) prefetch_range(res + p0, res + p1);
     }
     // Most list entries are not in contact (the skin): pick the touching or live ones first,
     // without branches, so the loads of all entries overlap and no branch mispredicts.
@@ -148,7 +150,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if (alive) {
         F += out.f;
         T += out.ti;
-        res[k] = {out.f, out.tj};
+        if (!kScatter || keep_pair) res[k] = {out.f, out.tj};
         if constexpr (kScatter) {  // one thread: j's share straight into its reverse sums
           rev[j].f -= out.f;
           rev[j].tj += out.tj;

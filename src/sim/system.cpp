@@ -205,7 +205,8 @@ void System::compute_forces() {
   if (pair_.size() < np) pair_.resize(np);
   if (rev_.size() < particles.size()) rev_.resize(particles.size());
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  const bool radii = thermal || cfg.record_contact_radii;
+  const bool radii = thermal || cfg.record_contacts;
+  contacts_recorded_ = radii;
   if (radii) {
     if (a_pair_.size() < nl.pair_count()) a_pair_.resize(nl.pair_count());
     if (a_wall_.size() < nw) a_wall_.resize(nw);
@@ -213,6 +214,7 @@ void System::compute_forces() {
   // Gravity is added by the kernel, after the contact forces of each free particle.
   ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
+  ctx.keep_pair = radii;
   ctx.a_pair = radii ? a_pair_.data() : nullptr;
   ctx.a_wall = radii ? a_wall_.data() : nullptr;
   model->compute(ctx);

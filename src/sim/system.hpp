@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -42,9 +43,11 @@ struct SimConfig {
   /// the work (results do not depend on the thread count either way).
   long parallel_min = 4000;
   double initial_temperature = 293.15;  ///< K, given to every new particle
-  /// Record each contact's radius in the force pass (set when the contact network is written;
-  /// always on with a thermal model).
-  bool record_contact_radii = false;
+  /// Record each pair contact's force and each contact's radius in the force pass, for
+  /// pair_force() and the contact radii (set when the contact network is written or bed
+  /// stresses are measured; always on with a thermal model). Off, the one-thread force loop
+  /// writes no per-pair results at all (less memory traffic).
+  bool record_contacts = false;
 };
 
 class ThermalModel;  // thermal/thermal.hpp
@@ -120,9 +123,13 @@ class System {
 
   // Per-contact results of the last force pass, indexed like nl.jdx (pairs) and nl.wall (wall
   // entries); valid where nl.hist.live / nl.whist.live. Forces act on the particle (pair: on i).
-  // Contact radii are recorded only with a thermal model or SimConfig::record_contact_radii.
+  // Recorded only with a thermal model or SimConfig::record_contacts (pair_force throws
+  // std::logic_error otherwise: a caller that forgot the switch must not read stale forces).
   /// Force on i of pair entry k (zero when not live).
-  Vec3 pair_force(size_t k) const { return nl.hist.live[k] ? pair_[k].f : Vec3{}; }
+  Vec3 pair_force(size_t k) const {
+    if (!contacts_recorded_) throw std::logic_error("System::pair_force: pair forces were not recorded (SimConfig::record_contacts)");
+    return nl.hist.live[k] ? pair_[k].f : Vec3{};
+  }
   const std::vector<double>& pair_contact_radii() const { return a_pair_; }
   const std::vector<Vec3>& wall_forces() const { return f_wall_; }
   const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
@@ -138,6 +145,7 @@ class System {
   bool dirty_ = true;
   SavedContacts pending_;
   bool has_pending_ = false;
+  bool contacts_recorded_ = false;  ///< the last force pass stored pair forces and contact radii
   void install_pending();
   void prepare_reach();
   std::vector<PairResult> pair_, rev_;
