@@ -19,6 +19,10 @@ struct ContactLaw {
   using Tangential = T;
   using Rolling = R;
   using Twisting = W;
+  // A tangential model that keeps no record of its stiffness (LinearTangential) needs a
+  // normal law whose stiffness is fixed within a contact.
+  static_assert(!requires { T::kNeedsFixedStiffness; } || requires { N::kFixedStiffness; },
+                "this tangential model needs a normal law of fixed stiffness");
 
   struct Params {
     typename N::Params normal;

@@ -10,6 +10,7 @@ namespace cohdem {
 
 struct LinearNormal : NormalBase {
   struct Params { double kn; };
+  static constexpr bool kFixedStiffness = true;  // kn never changes within a contact
   static constexpr std::array specs = {
       req("kn", "N/m", 0, kInf, "normal spring stiffness", true)};
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0])}; }

@@ -22,13 +22,19 @@ namespace cohdem {
 
 struct TangentialCommon {
   struct State { Vec3 fs; double kt_prev = 0; };
+  /// History of a spring whose stiffness never changes within a contact (step 2 is void):
+  /// 24 bytes, not 32, per list entry.
+  struct FixedState { Vec3 fs; };
   /// Shared history update; returns the tangential force on i.
-  static Vec3 update(State& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {
+  template <class S>
+  static Vec3 update(S& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {
     // 1. rotate into the tangent plane, keep magnitude
     rotate_into_plane(s.fs, g.n);
     // 2. no energy from a stiffness drop
-    if (s.kt_prev > 0 && kt < s.kt_prev) s.fs *= kt / s.kt_prev;
-    s.kt_prev = kt;
+    if constexpr (requires { s.kt_prev; }) {
+      if (s.kt_prev > 0 && kt < s.kt_prev) s.fs *= kt / s.kt_prev;
+      s.kt_prev = kt;
+    }
     // 3. increment
     s.fs -= g.vt * (kt * g.dt);
     Vec3 ft = s.fs - g.vt * gamma_t;
@@ -49,6 +55,10 @@ inline constexpr ParamSpec kDampTSpec =
 
 struct LinearTangential : TangentialCommon {
   struct Params { double mu, kt, kt_ratio, damp_t; };
+  /// kt is fixed per material pair (kt, or kt_ratio times a linear normal law's constant
+  /// kn; the registry pairs this model with LinearNormal only), so no kt_prev is kept.
+  using State = FixedState;
+  static constexpr bool kNeedsFixedStiffness = true;  // checked by ContactLaw
   static constexpr std::array specs = {
       kMuSpec,
       opt("kt", "N/m", 0, 0, kInf, "tangential stiffness (0: use kt_ratio * kn)"),
