@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 
 #include <omp.h>
 
@@ -79,6 +80,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const Vec3 grav = c.gravity;
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   const bool keep_pair = c.keep_pair;
+  if ((keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1)) && c.pair.size() < nl.pair_count())
+    throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
   // Pass 1 of row i.
   auto row = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {

@@ -202,11 +202,15 @@ void System::do_pours() {
 
 void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
-  if (pair_.size() < np) pair_.resize(np);
-  if (rev_.size() < particles.size()) rev_.resize(particles.size());
-  if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   const bool radii = thermal || cfg.record_contacts;
   contacts_recorded_ = radii;
+  // The per-pair results exist only when read: recorded contacts, or the gather of several
+  // threads (the kernel goes parallel above parallel_min particles). One thread without
+  // recording never touches them (48 bytes per list entry saved).
+  const bool several = long(particles.size()) > cfg.parallel_min && omp_get_max_threads() > 1;
+  if ((radii || several) && pair_.size() < np) pair_.resize(np);
+  if (rev_.size() < particles.size()) rev_.resize(particles.size());
+  if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   if (radii) {
     if (a_pair_.size() < nl.pair_count()) a_pair_.resize(nl.pair_count());
     if (a_wall_.size() < nw) a_wall_.resize(nw);
