@@ -31,6 +31,10 @@ struct NormalOut {
   /// for elastic laws; hysteretic laws give their elastic (unloading) stiffness, JKR 2 E* a.
   double kn = 0;
   double a = 0;      ///< contact radius, m (conduction, Mindlin stiffness)
+  /// Hysteretic laws: the virgin-loading coefficient times delta^(n-1), k1 delta^(n-1) (N/m),
+  /// the base of their tangential stiffness (HystTangential reads it, so delta^(n-1) and k1
+  /// are computed once per contact); 0 for other laws.
+  double k_load = 0;
   /// Adhesive part included in f_el, as a magnitude (N, >= 0): the pull-off force an
   /// adhesive model adds (Walton Fc, JKR/DMT pull-off, MEPA/EEPA adhesive bound). Read by
   /// cohesion-offset Coulomb limits and by Walton's bending/twisting limits; 0 otherwise.

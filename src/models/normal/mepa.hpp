@@ -153,6 +153,7 @@ struct HystereticNormal : NormalBase {
     o.f_el = p.f0 + f;
     o.f_adh = A - p.f0;
     o.kn = p.n * k.k2 * dn1;
+    o.k_load = k.k1 * dn1;
     o.a = g.want_a ? std::sqrt(g.rstar * d) : 0.0;
   }
 
@@ -276,16 +277,16 @@ struct HystTangential : TangentialCommon {
     return {N::make(p, m), p.get(specs[0]), p.get(specs[3]), p.get(specs[2]), p.get(specs[4]),
             get_choice(p, specs[1])};
   }
-  static double stiffness(const Params& p, const PairGeom& g) {
+  /// no.k_load = k1 delta^(n-1), from the normal law's evaluation of this contact.
+  static double stiffness(const Params& p, const PairGeom& g, const NormalOut& no) {
     if (p.kt > 0) return p.kt;
-    const double k1 = N::k1_of(p.np, g.rstar);
     const double n = p.np.n;
-    if (p.form == 2 || n == 1.0) return p.kt_ratio * k1;
-    const double dn1 = g.delta > 0 ? pow_nm1(g.delta, n) : 0.0;  // delta^(n-1)
-    return p.kt_ratio * k1 * dn1 * (p.form == 0 ? n : 1.0);
+    if (n == 1.0) return p.kt_ratio * no.k_load;  // k_load = k1
+    if (p.form == 2) return p.kt_ratio * N::k1_of(p.np, g.rstar);
+    return p.kt_ratio * no.k_load * (p.form == 0 ? n : 1.0);
   }
-  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double gamma_n, double fc, State& s) {
-    return update(s, g, stiffness(p, g), p.damp_t * gamma_n, p.mu, fc);
+  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc, State& s) {
+    return update(s, g, stiffness(p, g, no), p.damp_t * gamma_n, p.mu, fc);
   }
 };
 
