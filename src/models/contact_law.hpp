@@ -23,6 +23,10 @@ struct ContactLaw {
   // normal law whose stiffness is fixed within a contact.
   static_assert(!requires { T::kNeedsFixedStiffness; } || requires { N::kFixedStiffness; },
                 "this tangential model needs a normal law of fixed stiffness");
+  // Mindlin's tangential damping takes sqrt(kt/kn) = sqrt(4 G*/E*) per material pair, which
+  // holds for normal laws with kn = 2 E* a.
+  static_assert(!requires { T::kNeedsHertzianStiffness; } || requires { N::kHertzianStiffness; },
+                "this tangential model needs a normal law with kn = 2 E* a");
 
   struct Params {
     typename N::Params normal;

@@ -17,6 +17,7 @@ namespace cohdem {
 
 struct DmtNormal : NormalBase {
   struct Params { double Estar, w; };
+  static constexpr bool kHertzianStiffness = true;  // kn = 2 E* a, E* of the material pair
   static constexpr std::array specs = {kWorkOfAdhesion};
   static Params make(const ParamSet& p, const PairMaterial& m) { return {m.Estar, p.get(specs[0])}; }
   static double pull_off(const Params& p, double rstar) { return 2.0 * M_PI * p.w * rstar; }

@@ -12,6 +12,7 @@ namespace cohdem {
 
 struct HertzNormal : NormalBase {
   struct Params { double Estar; };
+  static constexpr bool kHertzianStiffness = true;  // kn = 2 E* a, E* of the material pair
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial& m) { return {m.Estar}; }
   static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {

@@ -74,17 +74,23 @@ struct LinearTangential : TangentialCommon {
 };
 
 struct MindlinTangential : TangentialCommon {
-  struct Params { double mu, Gstar, damp_t; };
+  /// damp_kt = damp_t sqrt(kt/kn) = damp_t sqrt(4 G*/E*), a constant per material pair.
+  struct Params { double mu, Gstar, damp_t, damp_kt; };
+  /// Needs kn = 2 E* a with PairMaterial's E* (Hertz, JKR, DMT; checked by ContactLaw).
+  static constexpr bool kNeedsHertzianStiffness = true;
   static constexpr std::array specs = {kMuSpec, opt("damp_t", "-", 1.0, 0, kInf,
       "tangential damping coefficient as a fraction of the normal one (scaled by sqrt(kt/kn))")};
   static Params make(const ParamSet& p, const PairMaterial& m) {
-    return {p.get(specs[0]), m.Gstar, p.get(specs[1])};
+    const double damp_t = p.get(specs[1]);
+    return {p.get(specs[0]), m.Gstar, damp_t, m.Estar > 0 ? damp_t * std::sqrt(4.0 * m.Gstar / m.Estar) : 0.0};
   }
   static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
                     State& s) {
     const double kt = 8.0 * p.Gstar * no.a;
     // EDEM/LAMMPS form: gamma_t = gamma_n sqrt(kt/kn) (same damping ratio as the normal).
-    const double gt = no.kn > 0 ? p.damp_t * gamma_n * std::sqrt(kt / no.kn) : 0.0;
+    // With the Hertzian kn = 2 E* a, kt/kn = 4 G*/E* whatever the overlap: no square root
+    // per contact (gamma_n is 0 where a is, so no guard is needed at first touch).
+    const double gt = p.damp_kt * gamma_n;
     return update(s, g, kt, gt, p.mu, fc);
   }
 };
