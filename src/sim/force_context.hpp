@@ -22,8 +22,9 @@ struct ForceContext {
   // Per-pair results (indexed like nl.jdx), valid where nl.hist.live[k]; i's side is summed
   // straight into particle i.
   std::vector<PairResult>& pair;
-  /// Per particle, one thread only: the sums of the pairs where it is j (force, torque),
-  /// scattered during the row sweep. At least as long as the particle arrays.
+  /// Per particle: the sums of the pairs where it is j (force, torque), scattered during the
+  /// row sweep by the one thread that holds all of its pairs (force_kernel.hpp, "local").
+  /// At least as long as the particle arrays.
   std::vector<PairResult>& rev;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
@@ -34,8 +35,8 @@ struct ForceContext {
   Vec3 gravity{};
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
-  /// Store every live pair's result in `pair` even when one thread needs no gather (the
-  /// multi-thread gather always stores them).
+  /// Store every live pair's result in `pair` (otherwise only those gathered across thread
+  /// blocks are stored).
   bool keep_pair = true;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).

@@ -8,14 +8,14 @@
 // Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
 //   order, adds that to i's own row sum, then i's wall contacts, then the body force.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
-// count. Several threads: one parallel region; each thread runs pass 1 over a contiguous
-// block of particles and pass 2 of each particle as soon as the rows it depends on are done
-// (while the pair results are still in cache), gathering the reverse sums through the
-// transposed index; particles that depend on another block wait for the single barrier.
-// One thread: the row sweep scatters j's share straight into j's reverse sums (in ascending
-// list order, as the gather would add them), so pass 2 needs no walk over the transposed
-// index. Only WHEN pass 2 runs and how the reverse sums are collected depend on the thread
-// count, never what is summed or in which order.
+// count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
+// and pass 2 of each particle as soon as the rows it depends on are done; particles that
+// depend on another block wait for the single barrier. The row sweep scatters j's share
+// straight into j's reverse sums (in ascending list order) when all of j's pairs lie in the
+// sweeping thread's block (always, on one thread); pairs of particles near a block boundary
+// store their results, gathered through the transposed index in the same order. Only WHEN
+// pass 2 runs and how the reverse sums are collected depend on the thread count, never what
+// is summed or in which order.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -83,8 +83,20 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   if ((keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1)) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
-  // Pass 1 of row i.
-  auto row = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
+  // Rows that hold a pair of particle p: dep_lo[p]..dep_hi[p] (p's own row included). A
+  // particle whose rows all lie in the block [a, b) of one thread is "local" to it: that
+  // thread alone scatters into its reverse sums (in ascending list order, rows being swept
+  // in order), with no per-pair store and no gather. The others (near a block boundary)
+  // have their pairs' results stored and gathered through the transposed index. One thread:
+  // every particle is local (kAllLocal skips the test).
+  const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
+  const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
+  auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
+    return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
+  };
+
+  // Pass 1 of row i, in block [a, b).
+  auto row = [&]<bool kAllLocal>(const long i, const long a, const long b) __attribute__((always_inline)) {
     const Vec3 xi = x[i];
     const double ri = radius[i];
     const int si = species[i];
@@ -95,7 +107,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (i + kPrefetchRows < n) {
       const uint32_t p0 = start[i + kPrefetchRows], p1 = start[i + kPrefetchRows + 1];
       prefetch_range(hs + p0, hs + p1);
-      if (!kScatter || keep_pair) prefetch_range(res + p0, res + p1);
+      if (keep_pair) prefetch_range(res + p0, res + p1);
     }
     // Most list entries are not in contact (the skin): pick the touching or live ones first,
     // without branches, so the loads of all entries overlap and no branch mispredicts.
@@ -153,10 +165,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if (alive) {
         F += out.f;
         T += out.ti;
-        if (!kScatter || keep_pair) res[k] = {out.f, out.tj};
-        if constexpr (kScatter) {  // one thread: j's share straight into its reverse sums
+        if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
           rev[j].f -= out.f;
           rev[j].tj += out.tj;
+          if (keep_pair) res[k] = {out.f, out.tj};
+        } else {
+          res[k] = {out.f, out.tj};  // gathered by j's thread after the barrier
         }
         if (c.a_pair) c.a_pair[k] = out.a;
       }
@@ -166,12 +180,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     torque[i] = T;
   };
   // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
-  auto finish = [&]<bool kScatter>(const long i) __attribute__((always_inline)) {
+  auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b) __attribute__((always_inline)) {
     // The pairs where i is j, summed on their own in ascending list order (the order of
-    // rpair, and the order in which a single thread's row sweep scatters them), then added
-    // to i's own row sum: the same operations whichever way they were gathered.
+    // rpair, and the order in which the row sweep scatters them), then added to i's own row
+    // sum: the same operations whichever way they were collected.
     Vec3 R, RT;
-    if constexpr (kScatter) {
+    if (kAllLocal || local(uint32_t(i), a, b)) {
       R = rev[i].f;
       RT = rev[i].tj;
     } else {
@@ -227,8 +241,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // row) while those rows lie in the block, so pair results are read back while they are
   // still in cache. Particles that depend on rows of other blocks wait for the barrier.
   // Only the time at which pass 2 runs depends on the thread count, never the order of sums.
-  const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
-  const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
@@ -243,20 +255,23 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // of its pairs is done.
       std::fill(rev, rev + n, PairResult{});
       for (long i = 0; i < n; ++i) {
-        row.template operator()<true>(i);
-        for (; next <= i && long(dep_hi[next]) <= i; ++next) finish.template operator()<true>(next);
+        row.template operator()<true>(i, 0, n);
+        for (; next <= i && long(dep_hi[next]) <= i; ++next) finish.template operator()<true>(next, 0, n);
       }
-      for (long q = next; q < n; ++q) finish.template operator()<true>(q);
+      for (long q = next; q < n; ++q) finish.template operator()<true>(q, 0, n);
     } else {
+      // The reverse sums of the block's particles (only this thread scatters into those of
+      // its local particles; the others' stay unused).
+      std::fill(rev + a, rev + b, PairResult{});
       for (long i = a; i < b; ++i) {
-        row.template operator()<false>(i);
+        row.template operator()<false>(i, a, b);
         for (; next <= i && long(dep_hi[next]) <= i; ++next)
-          if (long(dep_lo[next]) >= a) finish.template operator()<false>(next);
+          if (long(dep_lo[next]) >= a) finish.template operator()<false>(next, a, b);
       }
 #pragma omp barrier
       for (long q = a; q < next; ++q)
-        if (long(dep_lo[q]) < a) finish.template operator()<false>(q);
-      for (long q = next; q < b; ++q) finish.template operator()<false>(q);
+        if (long(dep_lo[q]) < a) finish.template operator()<false>(q, a, b);
+      for (long q = next; q < b; ++q) finish.template operator()<false>(q, a, b);
     }
   }
 }
