@@ -24,7 +24,8 @@ struct ForceContext {
   std::vector<PairResult>& pair;
   /// Per particle: the sums of the pairs where it is j (force, torque), scattered during the
   /// row sweep by the one thread that holds all of its pairs (force_kernel.hpp, "local").
-  /// At least as long as the particle arrays.
+  /// At least as long as the particle arrays and all zero between calls: the kernel resets
+  /// each entry when it reads it (a new buffer must start zeroed).
   std::vector<PairResult>& rev;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].

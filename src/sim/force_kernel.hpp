@@ -188,6 +188,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (kAllLocal || local(uint32_t(i), a, b)) {
       R = rev[i].f;
       RT = rev[i].tj;
+      rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
     } else {
       for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
         const uint32_t k = rpair[q];
@@ -253,16 +254,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // One thread: the reverse sums are scattered during the row sweep (no second walk
       // over the transposed index); a particle is finished once the last row holding one
       // of its pairs is done.
-      std::fill(rev, rev + n, PairResult{});
       for (long i = 0; i < n; ++i) {
         row.template operator()<true>(i, 0, n);
         for (; next <= i && long(dep_hi[next]) <= i; ++next) finish.template operator()<true>(next, 0, n);
       }
       for (long q = next; q < n; ++q) finish.template operator()<true>(q, 0, n);
     } else {
-      // The reverse sums of the block's particles (only this thread scatters into those of
-      // its local particles; the others' stay unused).
-      std::fill(rev + a, rev + b, PairResult{});
       for (long i = a; i < b; ++i) {
         row.template operator()<false>(i, a, b);
         for (; next <= i && long(dep_hi[next]) <= i; ++next)
