@@ -41,10 +41,13 @@ struct TangentialCommon {
     // 4. Coulomb
     const double lim = mu * fc;
     const double f2 = norm2(ft);
-    if (f2 > lim * lim) {
-      ft = f2 > 0 ? ft * (lim / std::sqrt(f2)) : Vec3{};
-      s.fs = ft;
-    }
+    // Without a branch: whether a contact slides changes from contact to contact and step to
+    // step, so a branch here mispredicts often. Sliding, ft is scaled to the limit (f2 > lim^2
+    // >= 0, so f2 > 0); sticking, it is multiplied by exactly 1.
+    const bool slide = f2 > lim * lim;
+    const double scale = slide ? lim / std::sqrt(slide ? f2 : 1.0) : 1.0;
+    ft *= scale;
+    s.fs = slide ? ft : s.fs;
     return ft;
   }
 };
