@@ -42,10 +42,11 @@ struct EpsdRolling {
     s.mk -= wr * (kr * g.dt);
     const double lim = p.mu_r * g.rstar * fc;
     const double m2 = norm2(s.mk);
-    if (m2 > lim * lim) {
-      s.mk = m2 > 0 ? s.mk * (lim / std::sqrt(m2)) : Vec3{};
-      return s.mk;
-    }
+    // Without a branch on sliding (it changes from contact to contact and mispredicts):
+    // sliding (m2 > lim^2 >= 0, so m2 > 0), the spring is scaled to the limit and acts alone;
+    // sticking, it is multiplied by exactly 1 and the viscous part is added.
+    const bool slide = m2 > lim * lim;
+    s.mk *= slide ? lim / std::sqrt(slide ? m2 : 1.0) : 1.0;
     if (p.eta_r > 0) {
       // I_r = Ji Jj / (Ji + Jj) with J = I + m r^2: one division. A wall (or fixed particle)
       // has I = inf and adds nothing (I_r is the other body's J); testing for it avoids
@@ -53,7 +54,8 @@ struct EpsdRolling {
       const bool wi = std::isinf(g.Ii), wj = std::isinf(g.Ij);
       const double Ji = wi ? 0.0 : g.Ii + g.mi * g.ri * g.ri, Jj = wj ? 0.0 : g.Ij + g.mj * g.rj * g.rj;
       const double Ir = wj ? Ji : (wi ? Jj : Ji * Jj / (Ji + Jj));
-      return s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
+      const Vec3 damped = s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
+      return slide ? s.mk : damped;
     }
     return s.mk;
   }
