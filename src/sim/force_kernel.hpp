@@ -70,7 +70,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
   PairResult* const __restrict res = c.pair.data();
-  PairResult* const __restrict rev = c.rev.data();  // one thread only
+  PairResult* const __restrict rev = c.rev.data();  // reverse sums of local particles
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
   Vec3* const __restrict c_wall = c.c_wall.data();
