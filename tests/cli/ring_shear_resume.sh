@@ -16,6 +16,16 @@ bad() { echo "FAIL $1"; fail=$((fail + 1)); }
 
 "$bin" run "$case" $args --out "$work/a" --quiet > "$work/a.log" 2>&1 || { echo "FAIL uninterrupted run"; cat "$work/a.log"; exit 1; }
 
+# The tester makes its particles from [ring_shear].size, so it must apply the default Verlet
+# skin itself: with a skin of 0 the lists would be rebuilt at every step (as they were before
+# 2026-11-24). With 0.2 r_max of skin a build lasts tens to thousands of steps here.
+python3 - "$work/a/summary.json" <<'PY' && ok "neighbor lists rebuilt rarely (skin applied)" || bad "neighbor lists rebuilt too often"
+import json, sys
+j = json.load(open(sys.argv[1]))
+print(f"     {j['neighbor_builds']} builds in {j['steps']} steps")
+sys.exit(0 if j["neighbor_builds"] * 10 < j["steps"] else 1)
+PY
+
 "$bin" run "$case" $args --out "$work/b" --quiet --max-wall-time 0 > "$work/b1.log" 2>&1; rc=$?
 if [ $rc = 75 ] && [ -f "$work/b/checkpoint.bin" ] && [ ! -f "$work/b/summary.json" ]; then ok "stopped after the first stage (exit 75)"
 else bad "first stop: exit $rc, expected 75 with a checkpoint and no summary"; cat "$work/b1.log"; fi
