@@ -133,22 +133,18 @@ struct HystereticNormal : NormalBase {
     const double A = p.kadh * (p.x_is_n ? D : powe(d, p.x));  // adhesive bound magnitude
     const double k2 = k2_at(k, s.Dmax);
     const double f1 = k.k1 * D, f2 = k2 * (D - s.Dp);
-    double f;
-    if (f2 >= f1) {  // virgin loading: new maximum (f2 >= f1 <=> D >= Dmax for k2 > k1)
-      f = f1;
-      s.Dmax = D;
-      s.Dp = D * (1.0 - k.k1 / k2_at(k, D));
-      s.branch = 1;
-    } else if (f2 > -A) {
-      f = f2;
-      s.branch = 2;
-    } else {
-      f = -A;
-      s.branch = 3;
-      if (p.shift) {
-        s.Dmax = shifted_dmax(k, D, A);
-        s.Dp = s.Dmax * (1.0 - k.k1 / k2_at(k, s.Dmax));
-      }
+    // The branch (loading, un/reloading, adhesive) changes from step to step in a sheared bed
+    // and mispredicts, so all three are computed and the result selected (same values as a
+    // branch would give). Virgin loading: a new maximum (f2 >= f1 <=> D >= Dmax for k2 > k1).
+    const bool load = f2 >= f1, adh = !load && !(f2 > -A);
+    const double f = load ? f1 : (adh ? -A : f2);
+    const double Dp_new = D * (1.0 - k.k1 / k2_at(k, D));
+    s.Dmax = load ? D : s.Dmax;
+    s.Dp = load ? Dp_new : s.Dp;
+    s.branch = load ? 1 : (adh ? 3 : 2);
+    if (p.shift && adh) {  // Luding's shift of the plastic overlap on the adhesive branch
+      s.Dmax = shifted_dmax(k, D, A);
+      s.Dp = s.Dmax * (1.0 - k.k1 / k2_at(k, s.Dmax));
     }
     o.f_el = p.f0 + f;
     o.f_adh = A - p.f0;
