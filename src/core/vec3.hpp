@@ -40,6 +40,16 @@ inline Vec3 normalized(const Vec3& a) {
 /// degrees since the last step: always, in practice) the factor's series to x^3 is exact to
 /// double precision (the next term, 35/128 x^4, is below 3e-17) and saves a square root on
 /// the critical path of every contact; larger turns take the exact factor.
+/// Factor that brings a vector of squared length m2 back to length lim (>= 0) when it is
+/// longer (a Coulomb-type limit on a spring's force or moment): lim/sqrt(m2) above the limit,
+/// exactly 1 within it. Selected without a branch: whether a contact slides changes from
+/// contact to contact and step to step, so a branch mispredicts. Above the limit m2 > lim^2
+/// >= 0, so the square root is of a positive number; within it, of 1 (the result unused).
+inline double limit_scale(double m2, double lim) {
+  const bool over = m2 > lim * lim;
+  return over ? lim / std::sqrt(over ? m2 : 1.0) : 1.0;
+}
+
 inline void rotate_into_plane(Vec3& h, const Vec3& n) {
   const double m0 = norm2(h);
   if (!(m0 > 0)) return;

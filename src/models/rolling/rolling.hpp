@@ -42,11 +42,10 @@ struct EpsdRolling {
     s.mk -= wr * (kr * g.dt);
     const double lim = p.mu_r * g.rstar * fc;
     const double m2 = norm2(s.mk);
-    // Without a branch on sliding (it changes from contact to contact and mispredicts):
-    // sliding (m2 > lim^2 >= 0, so m2 > 0), the spring is scaled to the limit and acts alone;
-    // sticking, it is multiplied by exactly 1 and the viscous part is added.
+    // Sliding, the spring is scaled to the limit and acts alone; sticking, it is multiplied
+    // by exactly 1 (no branch: limit_scale) and the viscous part is added.
     const bool slide = m2 > lim * lim;
-    s.mk *= slide ? lim / std::sqrt(slide ? m2 : 1.0) : 1.0;
+    s.mk *= limit_scale(m2, lim);
     if (p.eta_r > 0) {
       // I_r = Ji Jj / (Ji + Jj) with J = I + m r^2: one division. A wall (or fixed particle)
       // has I = inf and adds nothing (I_r is the other body's J); testing for it avoids

@@ -41,12 +41,10 @@ struct TangentialCommon {
     // 4. Coulomb
     const double lim = mu * fc;
     const double f2 = norm2(ft);
-    // Without a branch: whether a contact slides changes from contact to contact and step to
-    // step, so a branch here mispredicts often. Sliding, ft is scaled to the limit (f2 > lim^2
-    // >= 0, so f2 > 0); sticking, it is multiplied by exactly 1.
+    // Sliding, ft is scaled to the limit and becomes the spring; sticking, it is multiplied
+    // by exactly 1 (no branch: limit_scale).
     const bool slide = f2 > lim * lim;
-    const double scale = slide ? lim / std::sqrt(slide ? f2 : 1.0) : 1.0;
-    ft *= scale;
+    ft *= limit_scale(f2, lim);
     s.fs = slide ? ft : s.fs;
     return ft;
   }
