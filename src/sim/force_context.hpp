@@ -2,6 +2,8 @@
 #pragma once
 #include <vector>
 
+#include <omp.h>
+
 #include "neighbor/neighbor_list.hpp"
 #include "particles/particle_store.hpp"
 #include "walls/wall.hpp"
@@ -39,6 +41,10 @@ struct ForceContext {
   /// Store every live pair's result in `pair` (otherwise only those gathered across thread
   /// blocks are stored).
   bool keep_pair = true;
+  /// Whether `pair` must cover the neighbor list for n particles: recorded results, or a
+  /// force loop on several threads (it goes parallel above parallel_min particles), whose
+  /// block-boundary pairs are stored and gathered.
+  bool needs_pair_buffer(long n) const { return keep_pair || (n > parallel_min && omp_get_max_threads() > 1); }
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).
   double* a_pair = nullptr;

@@ -80,7 +80,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const Vec3 grav = c.gravity;
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   const bool keep_pair = c.keep_pair;
-  if ((keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1)) && c.pair.size() < nl.pair_count())
+  if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
   // Rows that hold a pair of particle p: dep_lo[p]..dep_hi[p] (p's own row included). A
@@ -249,27 +249,27 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.
-    long next = a;
-    if (nt == 1) {
-      // One thread: the reverse sums are scattered during the row sweep (no second walk
-      // over the transposed index); a particle is finished once the last row holding one
-      // of its pairs is done.
-      for (long i = 0; i < n; ++i) {
-        row.template operator()<true>(i, 0, n);
-        for (; next <= i && long(dep_hi[next]) <= i; ++next) finish.template operator()<true>(next, 0, n);
-      }
-      for (long q = next; q < n; ++q) finish.template operator()<true>(q, 0, n);
-    } else {
+    // One thread (a = 0, b = n) takes the same path with every particle local (kAllLocal:
+    // no locality tests; nothing is left for after the barrier).
+    auto sweep = [&]<bool kAllLocal>() __attribute__((always_inline)) {
+      long next = a;
       for (long i = a; i < b; ++i) {
-        row.template operator()<false>(i, a, b);
+        row.template operator()<kAllLocal>(i, a, b);
         for (; next <= i && long(dep_hi[next]) <= i; ++next)
-          if (long(dep_lo[next]) >= a) finish.template operator()<false>(next, a, b);
+          if (kAllLocal || long(dep_lo[next]) >= a) finish.template operator()<kAllLocal>(next, a, b);
       }
+      return next;
+    };
+    auto rest = [&]<bool kAllLocal>(const long next) __attribute__((always_inline)) {
+      if constexpr (!kAllLocal)
+        for (long q = a; q < next; ++q)
+          if (long(dep_lo[q]) < a) finish.template operator()<false>(q, a, b);
+      for (long q = next; q < b; ++q) finish.template operator()<kAllLocal>(q, a, b);
+    };
+    const long next = nt == 1 ? sweep.template operator()<true>() : sweep.template operator()<false>();
 #pragma omp barrier
-      for (long q = a; q < next; ++q)
-        if (long(dep_lo[q]) < a) finish.template operator()<false>(q, a, b);
-      for (long q = next; q < b; ++q) finish.template operator()<false>(q, a, b);
-    }
+    if (nt == 1) rest.template operator()<true>(next);
+    else rest.template operator()<false>(next);
   }
 }
 

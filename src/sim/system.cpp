@@ -202,25 +202,23 @@ void System::do_pours() {
 
 void System::compute_forces() {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
-  const bool radii = thermal || cfg.record_contacts;
-  contacts_recorded_ = radii;
-  // The per-pair results exist only when read: recorded contacts, or the gather of several
-  // threads (the kernel goes parallel above parallel_min particles). One thread without
-  // recording never touches them (48 bytes per list entry saved).
-  const bool several = long(particles.size()) > cfg.parallel_min && omp_get_max_threads() > 1;
-  if ((radii || several) && pair_.size() < np) pair_.resize(np);
+  const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
+  contacts_recorded_ = record;
   if (rev_.size() < particles.size()) rev_.resize(particles.size());
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  if (radii) {
-    if (a_pair_.size() < nl.pair_count()) a_pair_.resize(nl.pair_count());
+  if (record) {
+    if (a_pair_.size() < np) a_pair_.resize(np);
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
   ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
-  ctx.keep_pair = radii;
-  ctx.a_pair = radii ? a_pair_.data() : nullptr;
-  ctx.a_wall = radii ? a_wall_.data() : nullptr;
+  ctx.keep_pair = record;
+  ctx.a_pair = record ? a_pair_.data() : nullptr;
+  ctx.a_wall = record ? a_wall_.data() : nullptr;
+  // The per-pair results exist only when read (one thread without recording never touches
+  // them: 48 bytes per list entry saved).
+  if (ctx.needs_pair_buffer(long(particles.size())) && pair_.size() < np) pair_.resize(np);
   model->compute(ctx);
 
   // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
