@@ -164,10 +164,6 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   // --- System, walls, rough layers --------------------------------------------------------
   auto sys = build_system(c, !resuming);  // materials, model, [[wall]]s if any
   System& s = *sys;
-  // The case's default skin (0.2 x the largest radius, docs/case-file.md) comes from its own
-  // [[insert]] and [[particle]] tables; this app makes its particles from [ring_shear].size,
-  // so the default is applied here (a skin of 0 rebuilds the neighbor lists every step).
-  if (s.cfg.skin == 0) s.cfg.skin = 0.2 * rmax;
   if (box) {
     s.cfg.domain.lo = {0, 0, -1};
     s.cfg.domain.hi = {r.length, r.width, 1};

@@ -66,6 +66,10 @@ void System::prepare_reach() {
   double rmax = 0;
   for (double r : particles.radius) rmax = std::max(rmax, r);
   for (const auto& p : pours) rmax = std::max(rmax, p.spec.size.max_radius());
+  // Skin 0 means the default, 0.2 x the largest radius, however the particles were made
+  // (case tables, pours, an application's own fill); without it the lists would be rebuilt
+  // at every step.
+  if (cfg.skin <= 0) cfg.skin = 0.2 * rmax;
   reach_ = 0;
   const int n = int(materials.size());
   for (int i = 0; i < n; ++i)

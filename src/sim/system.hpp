@@ -35,7 +35,7 @@ struct Material {
 struct SimConfig {
   double dt = 0;            ///< s
   Vec3 gravity{0, 0, -9.81};///< m/s^2
-  double skin = 0;          ///< Verlet skin, m
+  double skin = 0;          ///< Verlet skin, m (0: 0.2 x the largest radius, set by prepare())
   Domain domain;
   int sort_every = 20;      ///< re-sort particles by cell every N neighbor builds (0: never)
   int threads = 0;          ///< OpenMP threads (0: OpenMP default)
