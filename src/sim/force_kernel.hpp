@@ -129,6 +129,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         hit_d[nhit][3] = d2;
         nhit += uint32_t((d2 < rsum * rsum) | (live[k] != 0));
       }
+      // The partners' reverse sums and velocities are far apart in memory (j runs over the
+      // neighbouring cells): ask for them all before the first contact needs them, so their
+      // misses overlap (chute: +6 to +10 % in interleaved runs).
+      for (uint32_t h = 0; h < nhit; ++h) {
+        const uint32_t j = jdx[hit[h]];
+        __builtin_prefetch(rev + j, 1, 3);
+        __builtin_prefetch(v + j, 0, 3);
+        __builtin_prefetch(omega + j, 0, 3);
+      }
       for (uint32_t h = 0; h < nhit; ++h) {
       const uint32_t k = hit[h];
       const uint32_t j = jdx[k];
