@@ -1,5 +1,6 @@
 // Everything one force evaluation reads and writes.
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include <omp.h>
@@ -14,6 +15,35 @@ namespace cohdem {
 /// torque on j. One record, so the gather of pass 2 touches one cache line, not two.
 struct PairResult {
   Vec3 f, tj;
+};
+
+/// Where the force loop on several threads keeps the results it stores for the gather: only
+/// pairs whose j is not local to the sweeping thread's block (near a block boundary) are
+/// stored, each in its own slot of a compact buffer, so the buffer holds those pairs rather
+/// than the whole list (48 bytes per stored pair instead of per list entry). The map is
+/// rebuilt when the list or the thread count changes.
+struct PairSlots {
+  static constexpr uint32_t kNone = ~uint32_t(0);
+  std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
+  uint32_t count = 0;        ///< slots in use
+  uint64_t builds = ~uint64_t(0);
+  long threads = 0, n = 0;
+  size_t np = 0;
+  /// Brings the map up to date for n particles on nt threads (blocks [n t/nt, n (t+1)/nt)).
+  void update(const NeighborList& nl, long n_, long nt) {
+    if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
+    builds = nl.stats.builds; threads = nt; n = n_; np = nl.pair_count();
+    of.assign(np, kNone);
+    count = 0;
+    for (long t = 0; t < nt; ++t) {
+      const long a = n * t / nt, b = n * (t + 1) / nt;
+      for (long i = a; i < b; ++i)
+        for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+          const uint32_t j = nl.jdx[k];
+          if (!(long(nl.dep_lo[j]) >= a && long(nl.dep_hi[j]) < b)) of[k] = count++;
+        }
+    }
+  }
 };
 
 struct ForceContext {
@@ -44,7 +74,12 @@ struct ForceContext {
   /// Whether `pair` must cover the neighbor list for n particles: recorded results, or a
   /// force loop on several threads (it goes parallel above parallel_min particles), whose
   /// block-boundary pairs are stored and gathered.
-  bool needs_pair_buffer(long n) const { return keep_pair || (n > parallel_min && omp_get_max_threads() > 1); }
+  bool needs_pair_buffer(long n) const {
+    return keep_pair || (slots == nullptr && n > parallel_min && omp_get_max_threads() > 1);
+  }
+  /// Several threads without recording: store the gathered pairs compactly (PairSlots; the
+  /// kernel sizes `pair` itself). Null: `pair` covers the list (needs_pair_buffer).
+  PairSlots* slots = nullptr;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).
   double* a_pair = nullptr;

@@ -69,7 +69,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const int32_t* const __restrict species = P.species.data();
   Vec3* const __restrict force = P.force.data();
   Vec3* const __restrict torque = P.torque.data();
-  PairResult* const __restrict res = c.pair.data();
+  // Per-pair results: indexed by list entry, or (several threads without recording, when
+  // the context brings PairSlots) by the entry's slot, set up at the start of the region.
+  PairResult* res = c.pair.data();
+  const uint32_t* slot_of = nullptr;
   PairResult* const __restrict rev = c.rev.data();  // reverse sums of local particles
   Vec3* const __restrict f_wall = c.f_wall.data();
   Vec3* const __restrict tw_wall = c.tw_wall.data();
@@ -179,7 +182,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           rev[j].tj += out.tj;
           if (keep_pair) res[k] = {out.f, out.tj};
         } else {
-          res[k] = {out.f, out.tj};  // gathered by j's thread after the barrier
+          res[slot_of ? slot_of[k] : k] = {out.f, out.tj};  // gathered by j's thread after the barrier
         }
         if (c.a_pair) c.a_pair[k] = out.a;
       }
@@ -201,7 +204,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     } else {
       for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
         const uint32_t k = rpair[q];
-        if (live[k]) { R -= res[k].f; RT += res[k].tj; }
+        if (live[k]) {
+          const PairResult& r = res[slot_of ? slot_of[k] : k];
+          R -= r.f;
+          RT += r.tj;
+        }
       }
     }
     Vec3 F = force[i] + R, T = torque[i] + RT;
@@ -255,6 +262,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const long a = n * tid / nt, b = n * (tid + 1) / nt;
+    if (nt > 1 && !keep_pair && c.slots) {
+#pragma omp single
+      {
+        c.slots->update(nl, n, nt);
+        if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
+        res = c.pair.data();
+        slot_of = c.slots->of.data();
+      }  // implicit barrier: every thread sees res and slot_of
+    }
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.

@@ -218,6 +218,7 @@ void System::compute_forces() {
   ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
   ctx.keep_pair = record;
+  ctx.slots = &slots_;
   ctx.a_pair = record ? a_pair_.data() : nullptr;
   ctx.a_wall = record ? a_wall_.data() : nullptr;
   // The per-pair results exist only when read (one thread without recording never touches

@@ -149,6 +149,7 @@ class System {
   void install_pending();
   void prepare_reach();
   std::vector<PairResult> pair_, rev_;
+  PairSlots slots_;  ///< compact per-pair results of the multi-thread gather
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
   std::vector<Vec3> wall_part_;  ///< per block of particles: force and torque on each wall
   std::vector<Vec3> wall_dx_;    ///< translation of each wall in the current step (move_walls)
