@@ -21,17 +21,9 @@ import statistics
 import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-REPO = os.path.dirname(HERE)
+from peer_compare import HERE, REPO, find_chute_data  # same folder
+
 CASES = [("linear", "chute.toml"), ("hertz_mindlin+epsd", "chute_hmr.toml"), ("mepa+epsd", "chute_mepa.toml")]
-
-
-def find_chute_data():
-    for up in ("..", os.path.join("..", "..")):
-        cand = os.path.normpath(os.path.join(REPO, up, "shared", "peers", "lammps-chute", "data.chute"))
-        if os.path.exists(cand):
-            return cand
-    return os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute")
 
 
 def mean_contacts(series_csv):

@@ -61,6 +61,15 @@ def parse_peer(text, nsteps):
     return atoms * steps / t, float(row[2]), float(row[3]), float(row[4])
 
 
+def find_chute_data():
+    """LAMMPS's chute data file in ../shared beside the repository (or beside a worktree's parent)."""
+    for up in ("..", os.path.join("..", "..")):
+        cand = os.path.normpath(os.path.join(REPO, up, "shared", "peers", "lammps-chute", "data.chute"))
+        if os.path.exists(cand):
+            return cand
+    return os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute")
+
+
 class Problem:
     def __init__(self, name, cohdem_case, vel_axis, lammps, liggghts, physics_tol, note=""):
         self.name, self.cohdem_case, self.vel_axis = name, cohdem_case, vel_axis
@@ -83,14 +92,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "peers"))
     a = ap.parse_args()
 
-    if a.chute_data is None:  # ../shared beside the repository (or beside a worktree's parent)
-        for up in ("..", os.path.join("..", "..")):
-            cand = os.path.normpath(os.path.join(REPO, up, "shared", "peers", "lammps-chute", "data.chute"))
-            if os.path.exists(cand):
-                a.chute_data = cand
-                break
-        else:
-            a.chute_data = os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute")
+    if a.chute_data is None:
+        a.chute_data = find_chute_data()
     problems = [p for p in a.problems.split(",") if p]
     peers = [p for p in a.peers.split(",") if p]
     for p in peers:

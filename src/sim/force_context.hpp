@@ -17,6 +17,15 @@ struct PairResult {
   Vec3 f, tj;
 };
 
+/// The force loop's split of n particles over nt threads: thread t sweeps [a, b).
+inline long block_begin(long n, long t, long nt) { return n * t / nt; }
+/// Particle q is "local" to the block [a, b) when every row that holds a pair of q lies in
+/// it (dep_lo/dep_hi from the list build): that block's thread alone scatters into q's
+/// reverse sums; the pairs of the other particles are stored and gathered.
+inline bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi, uint32_t q, long a, long b) {
+  return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
+}
+
 /// Where the force loop on several threads keeps the results it stores for the gather: only
 /// pairs whose j is not local to the sweeping thread's block (near a block boundary) are
 /// stored, each in its own slot of a compact buffer, so the buffer holds those pairs rather
@@ -36,12 +45,10 @@ struct PairSlots {
     of.assign(np, kNone);
     count = 0;
     for (long t = 0; t < nt; ++t) {
-      const long a = n * t / nt, b = n * (t + 1) / nt;
+      const long a = block_begin(n, t, nt), b = block_begin(n, t + 1, nt);
       for (long i = a; i < b; ++i)
-        for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
-          const uint32_t j = nl.jdx[k];
-          if (!(long(nl.dep_lo[j]) >= a && long(nl.dep_hi[j]) < b)) of[k] = count++;
-        }
+        for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
+          if (!local_to_block(nl.dep_lo.data(), nl.dep_hi.data(), nl.jdx[k], a, b)) of[k] = count++;
     }
   }
 };

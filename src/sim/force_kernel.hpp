@@ -95,7 +95,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
   const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
   auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
-    return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
+    return local_to_block(dep_lo, dep_hi, q, a, b);
   };
 
   // Pass 1 of row i, in block [a, b).
@@ -261,7 +261,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
-    const long a = n * tid / nt, b = n * (tid + 1) / nt;
+    const long a = block_begin(n, tid, nt), b = block_begin(n, tid + 1, nt);
     if (nt > 1 && !keep_pair && c.slots) {
 #pragma omp single
       {
