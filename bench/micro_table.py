@@ -2,8 +2,10 @@
 """Runs the micro-benchmarks (build/cohdem_bench) interleaved, several rounds, and prints the
 median CPU time per iteration of each, its particle-steps per CPU-second and its cost
 relative to the linear model (the force loop and the whole step each against their linear
-counterpart). Interleaving matters on a shared machine: a neighbour's load then falls on all
-benchmarks alike instead of on whichever ran at that moment.
+counterpart), and, for a law with rolling resistance, relative to the linear model with the
+same rolling sub-model (like for like). Interleaving matters on a shared machine: a
+neighbour's load then falls on all benchmarks alike instead of on whichever ran at that
+moment.
 
   python3 bench/micro_table.py                   # 5 rounds, the default set
   python3 bench/micro_table.py --rounds 7 --filters 'BM_Force/linear/,BM_Force/mepa\\+epsd/'
@@ -20,7 +22,8 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 DEFAULT = ("BM_Force/linear/,BM_Force/linear\\+epsd/,BM_Force/hertz_mindlin/,BM_Force/hertz_mindlin\\+epsd/,"
-           "BM_Force/mepa/,BM_Force/mepa\\+epsd/,BM_Force/walton/,BM_Step/linear/,BM_Step/mepa\\+epsd/,"
+           "BM_Force/mepa/,BM_Force/mepa\\+epsd/,BM_Force/walton/,BM_Step/linear/,BM_Step/linear\\+epsd/,"
+           "BM_Step/mepa\\+epsd/,"
            "BM_CaseStep/1/,BM_CaseStep/2/,BM_NeighborBuild/,BM_NeighborBuildWithHistory/")
 
 
@@ -62,17 +65,23 @@ def main():
     ref = {"BM_Force": next((n for n in order if n.startswith("BM_Force/linear/")), None),
            "BM_Step": next((n for n in order if n.startswith("BM_Step/linear/")), None)}
     print(f"\nmedian of {a.rounds} interleaved rounds (CPU time; real time for BM_CaseStep)")
-    print("| benchmark | ms per iteration | particle-steps per second | vs linear | counters |")
-    print("|---|---:|---:|---:|---|")
+    print("| benchmark | ms per iteration | particle-steps per second | vs linear | vs linear with the same rolling "
+          "| counters |")
+    print("|---|---:|---:|---:|---:|---|")
     for n in order:
         m = med(n)
         rate = statistics.median(ips for _, ips, _ in runs[n])
         kind = n.split("/")[0]
         vs = f"{m / med(ref[kind]):.2f}" if ref.get(kind) else ""
+        # Like for like: BM_Force/mepa+epsd/32 against BM_Force/linear+epsd/32, when both ran.
+        parts = n.split("/")
+        roll = parts[1].partition("+")[2] if len(parts) > 2 else ""
+        twin = "/".join([kind, "linear+" + roll] + parts[2:]) if roll else ""
+        same = f"{m / med(twin):.2f}" if twin in runs and twin != n else ""
         b = runs[n][-1][2]
         counters = ", ".join(f"{k} {b[k]:.3g}" for k in ("contacts_per_particle", "entries_per_particle",
                                                           "live_per_particle") if k in b)
-        print(f"| {n} | {m * 1e3:.2f} | {rate:.3g} | {vs} | {counters} |")
+        print(f"| {n} | {m * 1e3:.2f} | {rate:.3g} | {vs} | {same} | {counters} |")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """What a contact model costs in a whole run: LAMMPS's chute (32,000 spheres) with the linear
-model (bench/chute.toml), Hertz-Mindlin + EPSD rolling (bench/chute_hmr.toml) and MEPA
-n = 3/2 + EPSD rolling (bench/chute_mepa.toml), run by cohdem in one invocation, interleaved.
+model (bench/chute.toml), the linear model + EPSD rolling (bench/chute_epsd.toml),
+Hertz-Mindlin + EPSD rolling (bench/chute_hmr.toml) and MEPA n = 3/2 + EPSD rolling
+(bench/chute_mepa.toml), run by cohdem in one invocation, interleaved.
 
   python3 bench/model_cost.py                   # 5 runs of 1000 steps each, 1 thread
   python3 bench/model_cost.py --runs 7 --steps 500 --threads 2
@@ -9,10 +10,13 @@ n = 3/2 + EPSD rolling (bench/chute_mepa.toml), run by cohdem in one invocation,
 For each case: particle-steps per second (median, best), contacts per particle (mean of
 the run's series rows), ns per particle-step and ns per contact-step (loop time over
 contacts x steps: the law's own cost is easier to see when the contact counts differ), and
-the ratio to the linear model's time per particle-step. The softer laws leave more particles in contact than the
-stiff linear spring (the same bed, other physics), so the chute ratio is that of a user's
-choice of model on one problem; the cost of the law alone, on identical contacts, is
-BM_Force / BM_Step of cohdem_bench (bench/micro_table.py). Python 3 standard library only.
+the ratio to the linear model's time per particle-step, and for the laws with rolling
+resistance the ratio to the linear model with the same rolling sub-model (like for like:
+the normal and tangential laws alone differ). The softer laws leave more particles in
+contact than the stiff linear spring (the same bed, other physics), so the chute ratio is
+that of a user's choice of model on one problem; the cost of the law alone, on identical
+contacts, is BM_Force / BM_Step of cohdem_bench (bench/micro_table.py). Python 3 standard
+library only.
 """
 import argparse
 import json
@@ -23,7 +27,8 @@ import sys
 
 from peer_compare import HERE, REPO, find_chute_data  # same folder
 
-CASES = [("linear", "chute.toml"), ("hertz_mindlin+epsd", "chute_hmr.toml"), ("mepa+epsd", "chute_mepa.toml")]
+CASES = [("linear", "chute.toml"), ("linear+epsd", "chute_epsd.toml"), ("hertz_mindlin+epsd", "chute_hmr.toml"),
+         ("mepa+epsd", "chute_mepa.toml")]
 
 
 def mean_contacts(series_csv):
@@ -70,21 +75,25 @@ def main():
     print(f"\ncohdem, LAMMPS's chute (32,000 spheres), {a.steps} steps, {a.threads} thread(s), "
           f"{a.runs} interleaved runs each")
     print("| model | particle-steps/s median | best | contacts per particle | ns per particle-step (median) "
-          "| ns per contact-step | time per particle-step vs linear (median) |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+          "| ns per contact-step | time per particle-step vs linear (median) | vs linear with the same rolling |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
     table = {}
-    base = None
+    ns_of = {}
     for name, _ in CASES:
         v = [s["particle_steps_per_s"] for s in runs[name]]
         med, best = statistics.median(v), max(v)
         s0 = runs[name][-1]
         cpp = mean_contacts(os.path.join(a.out, "run_" + name, "series.csv")) / s0["particles"]
-        ns = 1e9 / med
-        base = base or ns
+        ns = ns_of[name] = 1e9 / med
+        base = ns_of["linear"]
+        # Like for like: a law with a rolling sub-model against the linear law with the same one.
+        roll = name.partition("+")[2]
+        same = ns / ns_of["linear+" + roll] if roll and name != "linear+" + roll else None
         table[name] = {"median": med, "best": best, "contacts_per_particle": cpp, "ns_per_particle_step": ns,
-                       "ns_per_contact_step": ns / cpp, "vs_linear": ns / base,
+                       "ns_per_contact_step": ns / cpp, "vs_linear": ns / base, "vs_linear_same_rolling": same,
                        "kinetic_energy": s0["kinetic_energy"], "runs": v}
-        print(f"| {name} | {med:.3e} | {best:.3e} | {cpp:.2f} | {ns:.0f} | {ns / cpp:.0f} | {ns / base:.2f}x |")
+        print(f"| {name} | {med:.3e} | {best:.3e} | {cpp:.2f} | {ns:.0f} | {ns / cpp:.0f} | {ns / base:.2f}x "
+              f"| {'' if same is None else f'{same:.2f}x'} |")
     json.dump(table, open(os.path.join(a.out, "results.json"), "w"), indent=1)
 
 

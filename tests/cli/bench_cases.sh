@@ -2,7 +2,7 @@
 # The benchmark inputs stay valid as the code changes (issue 6: "keep the benchmark script
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
-# steps, and model_cost.py prints its three rows. LAMMPS's chute data comes from ../shared
+# steps, and model_cost.py prints its four rows. LAMMPS's chute data comes from ../shared
 # beside the repository (as in CI). Speed itself is measured by the scripts, not here.
 set -u
 bin=$1; src=$2
@@ -26,19 +26,19 @@ print(("ok   " if ok else "FAIL ") + sys.argv[2], s["particles"], "particles,", 
 sys.exit(0 if ok else 1)
 PY
 }
-for c in chute chute_hmr chute_mepa; do
+for c in chute chute_epsd chute_hmr chute_mepa; do
   python3 "$src/bench/lammps_data_to_case.py" "$data" "$src/bench/$c.toml" -o "$work/$c.toml" > /dev/null || { echo "FAIL convert $c"; fail=$((fail+1)); continue; }
   check_case "$c" "$work/$c.toml"
 done
 python3 "$src/bench/gen_packing.py" 2000 "$work/packing.data" > /dev/null &&
   python3 "$src/bench/lammps_data_to_case.py" "$work/packing.data" "$src/bench/packing.toml" -o "$work/packing.toml" \
     --frozen "" --box xy > /dev/null && check_case packing "$work/packing.toml" || { echo "FAIL packing input"; fail=$((fail+1)); }
-# model_cost.py end to end (one run of 3 steps per law): three rows with positive rates.
+# model_cost.py end to end (one run of 3 steps per law): four rows with positive rates.
 if python3 "$src/bench/model_cost.py" --runs 1 --steps 3 --cohdem "$bin" --chute-data "$data" --out "$work/mc" > "$work/mc.log" 2>&1 &&
    python3 -c "
 import json, sys
 t = json.load(open('$work/mc/results.json'))
-ok = set(t) == {'linear', 'hertz_mindlin+epsd', 'mepa+epsd'} and all(r['median'] > 0 and r['contacts_per_particle'] > 0 for r in t.values())
+ok = set(t) == {'linear', 'linear+epsd', 'hertz_mindlin+epsd', 'mepa+epsd'} and all(r['median'] > 0 and r['contacts_per_particle'] > 0 for r in t.values())
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   model_cost.py"; else echo "FAIL model_cost.py"; tail -5 "$work/mc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
