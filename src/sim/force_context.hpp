@@ -35,6 +35,9 @@ struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
   std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
   uint32_t count = 0;        ///< slots in use
+  /// Per thread, during a force evaluation: the particles of its block left for after the
+  /// barrier (the kernel shares them out evenly among the threads there).
+  std::vector<std::vector<uint32_t>> deferred;
   uint64_t builds = ~uint64_t(0);
   long threads = 0, n = 0;
   size_t np = 0;
@@ -42,6 +45,7 @@ struct PairSlots {
   void update(const NeighborList& nl, long n_, long nt) {
     if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
     builds = nl.stats.builds; threads = nt; n = n_; np = nl.pair_count();
+    deferred.resize(size_t(nt));
     of.assign(np, kNone);
     count = 0;
     for (long t = 0; t < nt; ++t) {

@@ -10,12 +10,13 @@
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
 // and pass 2 of each particle as soon as the rows it depends on are done; particles that
-// depend on another block wait for the single barrier. The row sweep scatters j's share
-// straight into j's reverse sums (in ascending list order) when all of j's pairs lie in the
-// sweeping thread's block (always, on one thread); pairs of particles near a block boundary
-// store their results, gathered through the transposed index in the same order. Only WHEN
-// pass 2 runs and how the reverse sums are collected depend on the thread count, never what
-// is summed or in which order.
+// depend on another block wait for the single barrier, after which they are shared out
+// evenly among the threads. The row sweep scatters j's share straight into j's reverse sums
+// (in ascending list order) when all of j's pairs lie in the sweeping thread's block
+// (always, on one thread); pairs of particles near a block boundary store their results,
+// gathered through the transposed index in the same order. Only WHEN and on which thread
+// pass 2 runs, and how the reverse sums are collected, depend on the thread count, never
+// what is summed or in which order.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -261,8 +262,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
+    bool slots_ready = false;  // c.slots is up to date for this thread count
     const long a = block_begin(n, tid, nt), b = block_begin(n, tid + 1, nt);
     if (nt > 1 && !keep_pair && c.slots) {
+      slots_ready = true;  // every thread takes this branch alike
 #pragma omp single
       {
         c.slots->update(nl, n, nt);
@@ -292,9 +295,35 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       for (long q = next; q < b; ++q) finish.template operator()<kAllLocal>(q, a, b);
     };
     const long next = nt == 1 ? sweep.template operator()<true>() : sweep.template operator()<false>();
+    if (nt > 1 && slots_ready) {
+      // The particles left for after the barrier are not spread evenly: a block's first
+      // particles depend on the rows of the block before (the plane of cells across the
+      // boundary), the first block's on none. Each thread lists its own, and after the
+      // barrier all of them are shared out in equal parts. finish() is told the block that
+      // owns the particle (its locality test is the owner's), so what is summed, and in which
+      // order, is the same whichever thread finishes it.
+      std::vector<uint32_t>& mine = c.slots->deferred[size_t(tid)];
+      mine.clear();
+      for (long q = a; q < next; ++q)
+        if (long(dep_lo[q]) < a) mine.push_back(uint32_t(q));
+      for (long q = next; q < b; ++q) mine.push_back(uint32_t(q));
 #pragma omp barrier
-    if (nt == 1) rest.template operator()<true>(next);
-    else rest.template operator()<false>(next);
+      size_t total = 0;
+      for (long t = 0; t < nt; ++t) total += c.slots->deferred[size_t(t)].size();
+      const size_t g0 = total * size_t(tid) / size_t(nt), g1 = total * size_t(tid + 1) / size_t(nt);
+      size_t base = 0;
+      for (long t = 0; t < nt && base < g1; ++t) {
+        const std::vector<uint32_t>& list = c.slots->deferred[size_t(t)];
+        const size_t lo = std::max(g0, base), hi = std::min(g1, base + list.size());
+        const long ta = block_begin(n, t, nt), tb = block_begin(n, t + 1, nt);
+        for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb);
+        base += list.size();
+      }
+    } else {
+#pragma omp barrier
+      if (nt == 1) rest.template operator()<true>(next);
+      else rest.template operator()<false>(next);
+    }
   }
 }
 
