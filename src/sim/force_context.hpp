@@ -18,11 +18,11 @@ struct PairResult {
 };
 
 /// The force loop's split of n particles over nt threads: thread t sweeps [a, b).
-inline long block_begin(long n, long t, long nt) { return n * t / nt; }
+COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
 /// Particle q is "local" to the block [a, b) when every row that holds a pair of q lies in
 /// it (dep_lo/dep_hi from the list build): that block's thread alone scatters into q's
 /// reverse sums; the pairs of the other particles are stored and gathered.
-inline bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi, uint32_t q, long a, long b) {
+COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi, uint32_t q, long a, long b) {
   return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
 }
 
