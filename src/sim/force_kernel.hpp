@@ -288,11 +288,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       }
       return next;
     };
-    auto rest = [&]<bool kAllLocal>(const long next) __attribute__((always_inline)) {
+    // The particles of the block left for after the barrier, in ascending order: those
+    // depending on an earlier block, and all from `next` on (one thread: only the latter).
+    auto each_left = [&]<bool kAllLocal>(const long next, auto&& f) __attribute__((always_inline)) {
       if constexpr (!kAllLocal)
         for (long q = a; q < next; ++q)
-          if (long(dep_lo[q]) < a) finish.template operator()<false>(q, a, b);
-      for (long q = next; q < b; ++q) finish.template operator()<kAllLocal>(q, a, b);
+          if (long(dep_lo[q]) < a) f(q);
+      for (long q = next; q < b; ++q) f(q);
     };
     const long next = nt == 1 ? sweep.template operator()<true>() : sweep.template operator()<false>();
     if (nt > 1 && slots_ready) {
@@ -304,9 +306,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // order, is the same whichever thread finishes it.
       std::vector<uint32_t>& mine = c.slots->deferred[size_t(tid)];
       mine.clear();
-      for (long q = a; q < next; ++q)
-        if (long(dep_lo[q]) < a) mine.push_back(uint32_t(q));
-      for (long q = next; q < b; ++q) mine.push_back(uint32_t(q));
+      each_left.template operator()<false>(
+          next, [&](const long q) __attribute__((always_inline)) { mine.push_back(uint32_t(q)); });
 #pragma omp barrier
       size_t total = 0;
       for (long t = 0; t < nt; ++t) total += c.slots->deferred[size_t(t)].size();
@@ -321,8 +322,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       }
     } else {
 #pragma omp barrier
-      if (nt == 1) rest.template operator()<true>(next);
-      else rest.template operator()<false>(next);
+      if (nt == 1)
+        each_left.template operator()<true>(
+            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<true>(q, a, b); });
+      else
+        each_left.template operator()<false>(
+            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<false>(q, a, b); });
     }
   }
 }
