@@ -75,7 +75,10 @@ class NeighborList {
   void build(ParticleStore& p, const std::vector<Wall>& walls, const Domain& dom, double skin,
              double reach, bool resort);
 
-  /// True when some particle or wall moved (or grew) far enough that a pair may be missed.
+  /// True when some particle or wall moved (or grew) far enough that a pair may be missed:
+  /// two particles relative to each other (bounded by twice the largest displacement and by
+  /// the diagonal of the displacements' bounding box, so a bed moving as a whole does not
+  /// rebuild for that), or a particle relative to a wall.
   bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint

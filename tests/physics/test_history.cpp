@@ -55,10 +55,11 @@ Trace run(const std::string& model, Mode mode) {
   s->add_particle(0, kR, {-0.1, 0, 3 * kR}, {0.01, 0, 0});              // B (id 2)
   if (mode == Mode::Natural) {
     // Far particles (ids 3..6), at lower x than A-C (so the cell sort puts them first), flying
-    // off upwards and sideways at 3 m/s: the list is rebuilt every ~skin/2/3 m/s ~ 0.8 ms,
-    // and as they change cells the sort order changes.
+    // off upwards and sideways at 6 m/s: relative to the frozen C they move ~6.2 m/s, so the
+    // list is rebuilt every ~skin/6.2 m/s ~ 0.8 ms (NeighborList::needs_rebuild), and as they
+    // change cells the sort order changes.
     for (int k = 0; k < 4; ++k)
-      s->add_particle(0, kR, {-0.5 - 0.1 * k, 0.1 * k, 0.02}, {0.5 * k, 0, 3.0});
+      s->add_particle(0, kR, {-0.5 - 0.1 * k, 0.1 * k, 0.02}, {0.5 * k, 0, 6.0});
   }
   s->prepare();
   Trace tr;

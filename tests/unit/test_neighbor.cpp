@@ -70,3 +70,114 @@ void check(bool periodic, bool resort) {
 TEST(NeighborList, MatchesBruteForceSizeRatio3) { check(false, false); }
 TEST(NeighborList, MatchesBruteForcePeriodic) { check(true, false); }
 TEST(NeighborList, MatchesBruteForceAfterResort) { check(true, true); }
+
+// The rebuild criterion bounds the relative displacement of any two particles by the smaller
+// of twice the largest displacement and the diagonal of the displacements' bounding box
+// (NeighborList::needs_rebuild). Checked here: (1) a bed translated as a whole needs no
+// rebuild however far it goes, unless it has frozen particles (they stay behind); (2) it is
+// safe: in adversarial trials (a common drift, an unlisted pair driven together), whenever a
+// pair touches that is not in the list built at the reference, a rebuild is asked for.
+namespace {
+
+struct Bed {
+  ParticleStore p;
+  Domain d;
+  NeighborList nl;
+  double skin = 2e-4;
+  Bed(bool periodic, uint64_t seed) : p(random_particles(1200, 0.02, 2.5e-4, 7.5e-4, seed)) {
+    d.lo = {0, 0, 0};
+    d.hi = {0.02, 0.02, 0.02};
+    d.periodic = {periodic, periodic, periodic};
+    nl.hist.stride = nl.whist.stride = 8;
+    nl.build(p, {}, d, skin, 0.0, false);
+  }
+};
+
+}  // namespace
+
+TEST(NeighborList, RebuildCriterionIgnoresCommonTranslation) {
+  Bed b(true, 11);
+  const std::vector<Vec3> x0 = b.p.x;
+  // 25 skins along a diagonal: the old criterion (twice the largest displacement) would have
+  // rebuilt 50 times over; nothing moved relative to anything.
+  const Vec3 u{3e-3, -2e-3, 1.5e-3};
+  for (size_t i = 0; i < b.p.size(); ++i) b.p.x[i] = x0[i] + u;
+  EXPECT_FALSE(b.nl.needs_rebuild(b.p, {}, b.skin));
+  // One particle 0.6 skin further along: relative displacement 0.6 skin, still safe...
+  b.p.x[5] += Vec3{0.6 * b.skin, 0, 0};
+  EXPECT_FALSE(b.nl.needs_rebuild(b.p, {}, b.skin));
+  // ... and 1.1 skin: a pair may now be missed.
+  b.p.x[5] += Vec3{0.5 * b.skin, 0, 0};
+  EXPECT_TRUE(b.nl.needs_rebuild(b.p, {}, b.skin));
+  // With a frozen particle the translation itself is relative motion: 0.6 skin is safe,
+  // 1.1 skin is not.
+  Bed f(true, 12);
+  const std::vector<Vec3> y0 = f.p.x;
+  f.p.flag[7] = kFrozen;
+  for (size_t i = 0; i < f.p.size(); ++i)
+    if (i != 7) f.p.x[i] = y0[i] + Vec3{0.6 * f.skin, 0, 0};
+  EXPECT_FALSE(f.nl.needs_rebuild(f.p, {}, f.skin));
+  for (size_t i = 0; i < f.p.size(); ++i)
+    if (i != 7) f.p.x[i] = y0[i] + Vec3{1.1 * f.skin, 0, 0};
+  EXPECT_TRUE(f.nl.needs_rebuild(f.p, {}, f.skin));
+}
+
+TEST(NeighborList, RebuildCriterionNeverMissesAContact) {
+  // Adversarial trials: a common drift of up to 10 skins, small jitter for everyone, and one
+  // unlisted pair (the closest: gap >= skin at the build) driven together by 0.8 to 1.3 times
+  // its gap; in every other trial one of the two is frozen and the drift itself points at it.
+  // Whenever a pair touches that is not in the list, the criterion must ask for a rebuild.
+  Rng rng(21);
+  int quiet = 0, missed_trials = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    Bed b(trial % 3 != 0, 100 + trial);
+    const double skin = b.skin;
+    std::set<std::pair<uint64_t, uint64_t>> listed;
+    for (size_t i = 0; i < b.p.size(); ++i)
+      for (uint32_t k = b.nl.start[i]; k < b.nl.start[i + 1]; ++k) listed.insert({b.p.id[i], b.p.id[b.nl.jdx[k]]});
+    std::map<uint64_t, size_t> index_of;
+    for (size_t i = 0; i < b.p.size(); ++i) index_of[b.p.id[i]] = i;
+    // The closest unlisted pair.
+    double gmin = 1e9;
+    size_t ia = 0, ic = 0;
+    for (const auto& [key, dist] : brute(b.p, b.d, 3 * skin)) {
+      if (listed.count(key)) continue;
+      const size_t a = index_of[key.first], c = index_of[key.second];
+      const double g = dist - b.p.radius[a] - b.p.radius[c];
+      if (g < gmin) { gmin = g; ia = a; ic = c; }
+    }
+    ASSERT_LT(gmin, 1e9);
+    ASSERT_GE(gmin, skin * (1 - 1e-9));
+    Vec3 dir = b.p.x[ic] - b.p.x[ia];  // from a to c, minimum image
+    for (int k = 0; k < 3; ++k)
+      if (b.d.periodic[k]) dir[k] -= 0.02 * std::round(dir[k] / 0.02);
+    dir = normalized(dir);
+    const bool frozen = trial % 2 == 1;
+    const double s = gmin * rng.uniform(0.8, 1.3);
+    Vec3 u{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+    u = u * (10 * skin * rng.uniform(0, 1));
+    if (frozen) u = dir * (-10 * skin * rng.uniform(0, 1));  // c drifts towards the frozen a
+    if (frozen) b.p.flag[ia] = kFrozen;
+    const std::vector<Vec3> x0 = b.p.x;
+    for (size_t i = 0; i < b.p.size(); ++i) {
+      if (b.p.flag[i] == kFrozen) continue;
+      const Vec3 jit{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+      b.p.x[i] = x0[i] + u + jit * (0.1 * skin);
+    }
+    if (frozen) {
+      b.p.x[ic] = x0[ic] + u - dir * s;
+    } else {
+      b.p.x[ia] = x0[ia] + u + dir * (0.5 * s);
+      b.p.x[ic] = x0[ic] + u - dir * (0.5 * s);
+    }
+    bool missed = false;  // a touching pair that is not listed
+    for (const auto& [key, dist] : brute(b.p, b.d, 0.0)) missed = missed || !listed.count(key);
+    const bool rebuild = b.nl.needs_rebuild(b.p, {}, skin);
+    missed_trials += missed;
+    quiet += !rebuild;
+    EXPECT_TRUE(rebuild || !missed) << "trial " << trial << ": a touching pair is not listed, and no rebuild was asked for";
+  }
+  // Both sides exercised (seeded: the counts are fixed for this seed).
+  EXPECT_GT(quiet, 5) << "too few trials in which no rebuild was needed";
+  EXPECT_GT(missed_trials, 10) << "too few trials that really needed a rebuild";
+}
