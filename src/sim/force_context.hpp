@@ -30,7 +30,8 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi
 /// pairs whose j is not local to the sweeping thread's block (near a block boundary) are
 /// stored, each in its own slot of a compact buffer, so the buffer holds those pairs rather
 /// than the whole list (48 bytes per stored pair instead of per list entry). The map is
-/// rebuilt when the list or the thread count changes.
+/// rebuilt when the list or the thread count changes. Also holds, per thread, the particles
+/// left for after the kernel's barrier (with or without recording).
 struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
   std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
@@ -45,7 +46,6 @@ struct PairSlots {
   void update(const NeighborList& nl, long n_, long nt) {
     if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
     builds = nl.stats.builds; threads = nt; n = n_; np = nl.pair_count();
-    deferred.resize(size_t(nt));
     of.assign(np, kNone);
     count = 0;
     for (long t = 0; t < nt; ++t) {
@@ -88,8 +88,9 @@ struct ForceContext {
   bool needs_pair_buffer(long n) const {
     return keep_pair || (slots == nullptr && n > parallel_min && omp_get_max_threads() > 1);
   }
-  /// Several threads without recording: store the gathered pairs compactly (PairSlots; the
-  /// kernel sizes `pair` itself). Null: `pair` covers the list (needs_pair_buffer).
+  /// Several threads: the lists of particles shared out after the barrier, and, without
+  /// recording, the gathered pairs stored compactly (the kernel sizes `pair` itself). Null:
+  /// `pair` covers the list (needs_pair_buffer) and each thread finishes its own particles.
   PairSlots* slots = nullptr;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).

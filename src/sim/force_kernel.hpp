@@ -262,17 +262,21 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
-    bool slots_ready = false;  // c.slots is up to date for this thread count
     const long a = block_begin(n, tid, nt), b = block_begin(n, tid + 1, nt);
-    if (nt > 1 && !keep_pair && c.slots) {
-      slots_ready = true;  // every thread takes this branch alike
+    // Several threads with a PairSlots (a System always brings one): the post-barrier work
+    // is shared out (below), and without recording the gathered pairs are stored compactly.
+    const bool share = nt > 1 && c.slots != nullptr;
+    if (share) {
 #pragma omp single
       {
-        c.slots->update(nl, n, nt);
-        if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
-        res = c.pair.data();
-        slot_of = c.slots->of.data();
-      }  // implicit barrier: every thread sees res and slot_of
+        if (!keep_pair) {
+          c.slots->update(nl, n, nt);
+          if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
+          res = c.pair.data();
+          slot_of = c.slots->of.data();
+        }
+        if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
+      }  // implicit barrier: every thread sees res, slot_of and the lists
     }
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
@@ -297,7 +301,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       for (long q = next; q < b; ++q) f(q);
     };
     const long next = nt == 1 ? sweep.template operator()<true>() : sweep.template operator()<false>();
-    if (nt > 1 && slots_ready) {
+    if (share) {
       // The particles left for after the barrier are not spread evenly: a block's first
       // particles depend on the rows of the block before (the plane of cells across the
       // boundary), the first block's on none. Each thread lists its own, and after the

@@ -149,8 +149,9 @@ TEST(NeighborList, RebuildCriterionNeverMissesAContact) {
     ASSERT_LT(gmin, 1e9);
     ASSERT_GE(gmin, skin * (1 - 1e-9));
     Vec3 dir = b.p.x[ic] - b.p.x[ia];  // from a to c, minimum image
+    const Vec3 L = b.d.length();
     for (int k = 0; k < 3; ++k)
-      if (b.d.periodic[k]) dir[k] -= 0.02 * std::round(dir[k] / 0.02);
+      if (b.d.periodic[k]) dir[k] -= L[k] * std::round(dir[k] / L[k]);
     dir = normalized(dir);
     const bool frozen = trial % 2 == 1;
     const double s = gmin * rng.uniform(0.8, 1.3);
