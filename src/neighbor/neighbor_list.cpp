@@ -320,44 +320,40 @@ void NeighborList::rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const 
 }
 
 bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
-  if (x_ref_.size() != p.size()) return true;
+  if (!has_reference(p.size())) return true;
   const long n = long(p.size());
+  Drift d;
+#pragma omp parallel for reduction(drift : d) schedule(static) if (n > parallel_min)
+  for (long i = 0; i < n; ++i) {
+    if (p.flag[i] == kFrozen)
+      d.frozen = true;
+    else
+      d.add(p.x[i] - x_ref_[i], p.radius[i] - r_ref_[i]);
+  }
+  return rebuild_due(d, walls, skin);
+}
+
+bool NeighborList::rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const {
   // A pair can be missed only once the two particles have moved relative to each other by
   // more than the skin (less their radius growth). Their relative displacement is at most
   // twice the largest displacement, and at most the diagonal of the box that bounds all
   // displacements since the build: the smaller bound decides, so a bed moving as a whole (a
   // chute flow, a belt) rebuilds for what its particles move relative to each other, not for
   // how far it travels. Frozen particles do not move: with any, the box holds the origin.
-  // Walls keep the absolute bound (a wall does not move with the bed). min/max reductions
-  // are exact: the decision does not depend on the thread count.
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  double dmax2 = 0, grow = 0, lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
-  int frozen = 0;
-#pragma omp parallel for reduction(max : dmax2, grow, hx, hy, hz) reduction(min : lx, ly, lz) \
-    reduction(| : frozen) schedule(static) if (n > parallel_min)
-  for (long i = 0; i < n; ++i) {
-    if (p.flag[i] == kFrozen) {
-      frozen = 1;
-      continue;
-    }
-    const Vec3 d = p.x[i] - x_ref_[i];
-    dmax2 = std::max(dmax2, norm2(d));
-    lx = std::min(lx, d.x); ly = std::min(ly, d.y); lz = std::min(lz, d.z);
-    hx = std::max(hx, d.x); hy = std::max(hy, d.y); hz = std::max(hz, d.z);
-    grow = std::max(grow, p.radius[i] - r_ref_[i]);
-  }
-  const double dmax = std::sqrt(dmax2);
+  // Walls keep the absolute bound (a wall does not move with the bed).
+  const double dmax = std::sqrt(d.dmax2);
   double rel = 0;  // bound on any two particles' relative displacement
-  if (hx >= lx) {  // some particle moves
-    if (frozen) {
-      lx = std::min(lx, 0.0); ly = std::min(ly, 0.0); lz = std::min(lz, 0.0);
-      hx = std::max(hx, 0.0); hy = std::max(hy, 0.0); hz = std::max(hz, 0.0);
+  if (d.hi.x >= d.lo.x) {  // some particle moves
+    Vec3 lo = d.lo, hi = d.hi;
+    if (d.frozen) {
+      lo = {std::min(lo.x, 0.0), std::min(lo.y, 0.0), std::min(lo.z, 0.0)};
+      hi = {std::max(hi.x, 0.0), std::max(hi.y, 0.0), std::max(hi.z, 0.0)};
     }
-    rel = std::min(2 * dmax, norm(Vec3{hx - lx, hy - ly, hz - lz}));
+    rel = std::min(2 * dmax, norm(hi - lo));
   }
-  if (rel + 2 * grow > skin) return true;
+  if (rel + 2 * d.grow > skin) return true;
   for (size_t w = 0; w < walls.size(); ++w)
-    if (dmax + grow + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
+    if (dmax + d.grow + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
   return false;
 }
 

@@ -14,9 +14,11 @@
 // - Periodic images: positions are wrapped at rebuilds only; each pair stores the image
 //   code of j so distances need no minimum-image test in the force loop.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -41,6 +43,33 @@ struct HistoryArray {
   void resize(size_t n) { data.assign(n * stride, std::byte{0}); live.assign(n, 0); }
   void* at(size_t k) { return data.data() + k * stride; }
 };
+
+/// Displacements and radius growth of the particles since the last build, reduced over the
+/// particles (min and max only: exact, so the rebuild decision is the same on any number of
+/// threads). Filled by NeighborList::needs_rebuild, or by the integrator in the pass that
+/// moves the particles (System::step_once), and judged by NeighborList::rebuild_due.
+struct Drift {
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  double dmax2 = 0;  ///< largest squared displacement, m^2
+  double grow = 0;   ///< largest radius growth, m
+  Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};  ///< bounding box of the displacements
+  bool frozen = false;  ///< some particle is frozen (does not move: the origin is in the box)
+  /// A particle that can move, displaced by d, its radius grown by dr.
+  COHDEM_INLINE void add(const Vec3& d, double dr) {
+    dmax2 = std::max(dmax2, norm2(d));
+    lo.x = std::min(lo.x, d.x); lo.y = std::min(lo.y, d.y); lo.z = std::min(lo.z, d.z);
+    hi.x = std::max(hi.x, d.x); hi.y = std::max(hi.y, d.y); hi.z = std::max(hi.z, d.z);
+    grow = std::max(grow, dr);
+  }
+  void merge(const Drift& o) {
+    dmax2 = std::max(dmax2, o.dmax2);
+    grow = std::max(grow, o.grow);
+    lo = {std::min(lo.x, o.lo.x), std::min(lo.y, o.lo.y), std::min(lo.z, o.lo.z)};
+    hi = {std::max(hi.x, o.hi.x), std::max(hi.y, o.hi.y), std::max(hi.z, o.hi.z)};
+    frozen = frozen || o.frozen;
+  }
+};
+#pragma omp declare reduction(drift : cohdem::Drift : omp_out.merge(omp_in)) initializer(omp_priv = cohdem::Drift{})
 
 struct NeighborStats {
   uint64_t builds = 0;
@@ -80,6 +109,14 @@ class NeighborList {
   /// the diagonal of the displacements' bounding box, so a bed moving as a whole does not
   /// rebuild for that), or a particle relative to a wall.
   bool needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const;
+  /// The same decision from displacements reduced elsewhere (Drift, over every particle, from
+  /// the reference below); walls are judged here. Needs has_reference(n).
+  bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
+  /// Whether the lists were built for n particles (otherwise they must be rebuilt).
+  bool has_reference(size_t n) const { return x_ref_.size() == n; }
+  /// Positions and radii at the last build (for a Drift reduced by the caller).
+  const Vec3* x_ref() const { return x_ref_.data(); }
+  const double* r_ref() const { return r_ref_.data(); }
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint
   /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any

@@ -77,6 +77,11 @@ struct ForceContext {
   std::vector<Vec3>& c_wall;
   /// Body-force acceleration added to every free particle after its contact forces, m/s^2.
   Vec3 gravity{};
+  /// When > 0: velocity Verlet's closing half-kick, applied by the kernel to each free
+  /// particle as soon as its force and torque are complete, v += F kick_h/m, omega +=
+  /// T kick_h/I (the same operations as a separate pass after the kernel, one pass fewer).
+  /// No pair read after that point uses the particle's velocities. 0: forces only.
+  double kick_h = 0;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
   /// Store every live pair's result in `pair` (otherwise only those gathered across thread

@@ -6,7 +6,9 @@
 //   and the torque on j) goes to per-pair buffers (one thread: only when asked for,
 //   ForceContext::keep_pair; the row sweep scatters j's share itself).
 // Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
-//   order, adds that to i's own row sum, then i's wall contacts, then the body force.
+//   order, adds that to i's own row sum, then i's wall contacts, then the body force; when
+//   asked (ForceContext::kick_h), it then gives i's velocities velocity Verlet's closing
+//   half-kick, no row read after pass 2 of i using them.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
 // and pass 2 of each particle as soon as the rows it depends on are done; particles that
@@ -61,8 +63,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
   const Vec3* const __restrict x = P.x.data();
-  const Vec3* const __restrict v = P.v.data();
-  const Vec3* const __restrict omega = P.omega.data();
+  // Written only by the closing half-kick (ForceContext::kick_h), after every pair of the
+  // particle has been evaluated.
+  Vec3* const __restrict v = P.v.data();
+  Vec3* const __restrict omega = P.omega.data();
   const double* const __restrict radius = P.radius.data();
   const double* const __restrict mass = P.mass.data();
   const double* const __restrict inertia = P.inertia.data();
@@ -84,6 +88,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const Vec3 grav = c.gravity;
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   const bool keep_pair = c.keep_pair;
+  const double kick_h = c.kick_h;
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
@@ -249,9 +254,16 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         if (c.a_wall) c.a_wall[e] = out.a;
       }
     }
-    if (flag[i] == kFree) F += grav * mass[i];
+    const bool free_i = flag[i] == kFree;
+    if (free_i) F += grav * mass[i];
     force[i] = F;
     torque[i] = T;
+    // Every row that holds a pair of i is done (that is when finish runs): i's velocities
+    // are not read again in this call, and its force is final.
+    if (kick_h > 0 && free_i) {
+      v[i] += F * (kick_h / mass[i]);
+      omega[i] += T * (kick_h / inertia[i]);
+    }
   };
 
   // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2

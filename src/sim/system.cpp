@@ -136,7 +136,7 @@ void System::install_pending() {
   has_pending_ = false;
 }
 
-void System::move_walls(double dt) {
+void System::move_wall_geometry(double dt) {
   wall_dx_.resize(walls.size());
   for (size_t w = 0; w < walls.size(); ++w) {
     Wall& W = walls[w];
@@ -149,22 +149,6 @@ void System::move_walls(double dt) {
     W.point += dx;
     W.center += dx;
     if (W.control != WallControl::Prescribed) W.travel += W.vn * dt;
-  }
-  // Particles carried by walls (ribs, glued rough layers) move rigidly with them.
-  if (walls.empty()) return;
-  const long np = long(particles.size());
-#pragma omp parallel for schedule(static) if (np > cfg.parallel_min)
-  for (long i = 0; i < np; ++i) {
-    if (particles.flag[i] != kAttached) continue;
-    const Wall& W = walls[particles.body[i]];
-    const double wn = norm(W.omega);
-    Vec3 x = particles.x[i];
-    const Vec3 dx = wall_dx_[size_t(particles.body[i])];  // the wall's translation this step
-    // W.center has already moved by dx: rotate about the old centre, then translate.
-    if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
-    particles.x[i] = x + dx;
-    particles.v[i] = W.velocity_at(particles.x[i], time + dt);
-    particles.omega[i] = W.omega;
   }
 }
 
@@ -204,7 +188,7 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces() {
+void System::compute_forces(double kick_h) {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
   contacts_recorded_ = record;
@@ -217,6 +201,7 @@ void System::compute_forces() {
   // Gravity is added by the kernel, after the contact forces of each free particle.
   ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
+  ctx.kick_h = kick_h;
   ctx.keep_pair = record;
   ctx.slots = &slots_;
   ctx.a_pair = record ? a_pair_.data() : nullptr;
@@ -264,15 +249,43 @@ void System::step_once() {
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
-#pragma omp parallel for schedule(static) if (n > cfg.parallel_min)
+  // Walls move first: their motion does not depend on the particles (servo and lid speeds
+  // were set at the end of the previous step).
+  move_wall_geometry(dt);
+  // One pass over the particles: velocity Verlet's opening half-kick and the drift of free
+  // particles, the rigid carrying of particles attached to walls (rotated about the wall's
+  // old centre, then translated), and their displacement since the last list build, for the
+  // rebuild decision (the reduction is exact: the same on any number of threads).
+  const bool tracked = nl.has_reference(size_t(n));
+  const Vec3* const xr = nl.x_ref();
+  const double* const rr = nl.r_ref();
+  const double t1 = time + dt;
+  Drift drift;
+#pragma omp parallel for reduction(drift : drift) schedule(static) if (n > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
-    if (P.flag[i] != kFree) continue;
-    P.v[i] += P.force[i] * (h / P.mass[i]);
-    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
-    P.x[i] += P.v[i] * dt;
+    const uint8_t f = P.flag[i];
+    if (f == kFrozen) {
+      drift.frozen = true;
+      continue;
+    }
+    if (f == kFree) {
+      P.v[i] += P.force[i] * (h / P.mass[i]);
+      P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+      P.x[i] += P.v[i] * dt;
+    } else if (f == kAttached) {  // moves rigidly with wall body[i]
+      const Wall& W = walls[size_t(P.body[i])];
+      const double wn = norm(W.omega);
+      const Vec3 dx = wall_dx_[size_t(P.body[i])];  // the wall's translation this step
+      Vec3 x = P.x[i];
+      // W.center has already moved by dx: rotate about the old centre, then translate.
+      if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
+      P.x[i] = x + dx;
+      P.v[i] = W.velocity_at(P.x[i], t1);
+      P.omega[i] = W.omega;
+    }
+    if (tracked) drift.add(P.x[i] - xr[i], P.radius[i] - rr[i]);
   }
-  move_walls(dt);
-  time += dt;
+  time = t1;
   ++step;
   if (!pours.empty()) {
     const size_t before = P.size();
@@ -280,19 +293,23 @@ void System::step_once() {
     if (P.size() != before) dirty_ = true;
   }
   nl.parallel_min = cfg.parallel_min;
-  if (dirty_ || nl.needs_rebuild(P, walls, cfg.skin)) {
+  if (dirty_ || !tracked || nl.rebuild_due(drift, walls, cfg.skin)) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
-  compute_forces();
-  if (thermal) thermal->update(*this, true);  // heat flow, temperatures, radii (and inertia)
-  const long n2 = long(P.size());
+  // The closing half-kick: applied by the force kernel to each particle as its force is
+  // complete (one pass fewer), unless a thermal model changes radii and inertia first.
+  compute_forces(thermal ? 0.0 : h);
+  if (thermal) {
+    thermal->update(*this, true);  // heat flow, temperatures, radii (and inertia)
+    const long n2 = long(P.size());
 #pragma omp parallel for schedule(static) if (n2 > cfg.parallel_min)
-  for (long i = 0; i < n2; ++i) {
-    if (P.flag[i] != kFree) continue;
-    P.v[i] += P.force[i] * (h / P.mass[i]);
-    P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+    for (long i = 0; i < n2; ++i) {
+      if (P.flag[i] != kFree) continue;
+      P.v[i] += P.force[i] * (h / P.mass[i]);
+      P.omega[i] += P.torque[i] * (h / P.inertia[i]);
+    }
   }
   control_walls(dt);
 }

@@ -136,8 +136,12 @@ class System {
   const std::vector<double>& wall_contact_radii() const { return a_wall_; }
 
  private:
-  void compute_forces();
-  void move_walls(double dt);
+  /// Forces at the current state; kick_h > 0: each free particle's velocities also get the
+  /// half-kick F h/m, T h/I once its force is complete (ForceContext::kick_h).
+  void compute_forces(double kick_h = 0);
+  /// Moves the walls' geometry by one step (translation, oscillation, servo/lid travel) and
+  /// records each wall's translation in wall_dx_; step_once carries attached particles.
+  void move_wall_geometry(double dt);
   void control_walls(double dt);
   void do_pours();
   Vec3 initial_velocity(const InsertSpec& spec);
@@ -152,7 +156,7 @@ class System {
   PairSlots slots_;  ///< compact per-pair results of the multi-thread gather
   std::vector<Vec3> f_wall_, tw_wall_, c_wall_;
   std::vector<Vec3> wall_part_;  ///< per block of particles: force and torque on each wall
-  std::vector<Vec3> wall_dx_;    ///< translation of each wall in the current step (move_walls)
+  std::vector<Vec3> wall_dx_;    ///< translation of each wall in the current step (move_wall_geometry)
   std::vector<double> a_pair_, a_wall_;  ///< contact radii (conduction, contact network)
 };
 
