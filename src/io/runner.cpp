@@ -362,10 +362,15 @@ int run_case(const Case& c, const RunOptions& opt) {
                    particle_steps / el, hms(el / done * double(nsteps - k)));
     }
   }
+  // The rate is that of the time loop (as the peers' "loop time"); the final checkpoint
+  // (hundreds of MB at 10^6 particles) is timed on its own.
+  const auto t_loop = clock::now();
+  const double loop_s = std::chrono::duration<double>(t_loop - t0).count();
   check_finite(s);
   csv.flush();
   checkpoint();  // lets a user extend the duration and resume
-  const double wall_s = std::chrono::duration<double>(clock::now() - t0).count();
+  const auto t_end = clock::now();
+  const double wall_s = std::chrono::duration<double>(t_end - t0).count();
   nlohmann::json j;
   j["case"] = c.name;
   j["case_file"] = c.file;
@@ -373,8 +378,10 @@ int run_case(const Case& c, const RunOptions& opt) {
   j["steps"] = nsteps;
   j["dt"] = c.cfg.dt;
   j["simulated_time"] = s.time;
-  j["wall_time_s"] = wall_s;
-  j["particle_steps_per_s"] = wall_s > 0 ? double(particle_steps) / wall_s : 0.0;
+  j["wall_time_s"] = wall_s;  // time loop and final checkpoint
+  j["loop_time_s"] = loop_s;
+  j["final_checkpoint_s"] = std::chrono::duration<double>(t_end - t_loop).count();
+  j["particle_steps_per_s"] = loop_s > 0 ? double(particle_steps) / loop_s : 0.0;
   j["kinetic_energy"] = s.kinetic_energy();
   {  // flow observables of the free particles (benchmarks compare them with peer codes)
     double mfree = 0;
@@ -410,8 +417,9 @@ int run_case(const Case& c, const RunOptions& opt) {
       if (s.thermal->wall_fixed(w)) j["walls"][s.walls[w].name]["heat"] = s.thermal->wall_heat[w];
   }
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
-  spdlog::info("done: {} steps in {:.2f} s ({:.3g} particle-steps/s), {} frames, final KE {:.4g} J, {} contacts",
-               nsteps, wall_s, double(j["particle_steps_per_s"]), frame, s.kinetic_energy(), s.contact_count());
+  spdlog::info("done: {} steps in {:.2f} s ({:.3g} particle-steps/s; final checkpoint {:.2f} s), {} frames, final KE {:.4g} J, {} contacts",
+               nsteps, loop_s, double(j["particle_steps_per_s"]), double(j["final_checkpoint_s"]), frame, s.kinetic_energy(),
+               s.contact_count());
   return 0;
 }
 
