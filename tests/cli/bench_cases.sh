@@ -22,6 +22,9 @@ check_case() {  # name case.toml : check, then 3 steps
 import json, math, sys
 s = json.load(open(sys.argv[1]))
 ok = s["steps"] == 3 and s["particles"] > 0 and math.isfinite(s["kinetic_energy"]) and s["particle_steps_per_s"] > 0
+# The rate is particles x steps over the step loop's time; the final checkpoint is timed apart.
+ok = ok and 0 < s["loop_time_s"] <= s["wall_time_s"] and s["final_checkpoint_s"] >= 0 and \
+    abs(s["particle_steps_per_s"] * s["loop_time_s"] - s["particles"] * s["steps"]) <= 1e-6 * s["particles"] * s["steps"]
 print(("ok   " if ok else "FAIL ") + sys.argv[2], s["particles"], "particles,", s["steps"], "steps, KE", s["kinetic_energy"])
 sys.exit(0 if ok else 1)
 PY
