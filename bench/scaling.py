@@ -91,6 +91,13 @@ def main():
             rows.append({"problem": label, "particles": n, "threads": t, "particle_steps_per_s": rate,
                          "median_particle_steps_per_s": med, "contacts": j["contacts"],
                          "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"]})
+    # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
+    ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
+    if all(k in allr for k in ends):
+        lo, hi = ends
+        print(f"\ncost per particle-step, 10^6 over 10^4 ({threads[0]} thread(s)): "
+              f"{statistics.median(allr[lo]) / statistics.median(allr[hi]):.2f}x median, "
+              f"{max(allr[lo]) / max(allr[hi]):.2f}x best (target <= 1.20x)")
     with open(os.path.join(a.out, "scaling.json"), "w") as f:
         json.dump({"steps": a.steps, "repeat": a.repeat, "rows": rows}, f, indent=1)
 
