@@ -271,24 +271,29 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // row) while those rows lie in the block, so pair results are read back while they are
   // still in cache. Particles that depend on rows of other blocks wait for the barrier.
   // Only the time at which pass 2 runs depends on the thread count, never the order of sums.
+  // Several threads with a PairSlots (a System always brings one): the post-barrier work is
+  // shared out (below), and without recording the gathered pairs are stored compactly. The
+  // slots are set up before the parallel region, for the team it will have (no barrier for
+  // that inside); a team of another size sets them up again, inside.
+  auto setup_slots = [&](const long nt) {
+    if (!keep_pair) {
+      c.slots->update(nl, n, nt);
+      if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
+      res = c.pair.data();
+      slot_of = c.slots->of.data();
+    }
+    if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
+  };
+  const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
+  if (nt_plan > 1 && c.slots != nullptr) setup_slots(nt_plan);
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const long a = block_begin(n, tid, nt), b = block_begin(n, tid + 1, nt);
-    // Several threads with a PairSlots (a System always brings one): the post-barrier work
-    // is shared out (below), and without recording the gathered pairs are stored compactly.
     const bool share = nt > 1 && c.slots != nullptr;
-    if (share) {
+    if (share && nt != nt_plan) {
 #pragma omp single
-      {
-        if (!keep_pair) {
-          c.slots->update(nl, n, nt);
-          if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
-          res = c.pair.data();
-          slot_of = c.slots->of.data();
-        }
-        if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
-      }  // implicit barrier: every thread sees res, slot_of and the lists
+      setup_slots(nt);  // implicit barrier: every thread sees res, slot_of and the lists
     }
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
