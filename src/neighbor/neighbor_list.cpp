@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 #include "core/error.hpp"
 
@@ -324,12 +323,7 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
   const long n = long(p.size());
   Drift d;
 #pragma omp parallel for reduction(drift : d) schedule(static) if (n > parallel_min)
-  for (long i = 0; i < n; ++i) {
-    if (p.flag[i] == kFrozen)
-      d.frozen = true;
-    else
-      d.add(p.x[i] - x_ref_[i], p.radius[i] - r_ref_[i]);
-  }
+  for (long i = 0; i < n; ++i) add_drift(d, p, size_t(i));
   return rebuild_due(d, walls, skin);
 }
 

@@ -114,9 +114,14 @@ class NeighborList {
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return x_ref_.size() == n; }
-  /// Positions and radii at the last build (for a Drift reduced by the caller).
-  const Vec3* x_ref() const { return x_ref_.data(); }
-  const double* r_ref() const { return r_ref_.data(); }
+  /// Adds particle i's displacement and radius growth since the build to d (a frozen
+  /// particle only marks d.frozen). Needs has_reference(p.size()).
+  COHDEM_INLINE void add_drift(Drift& d, const ParticleStore& p, size_t i) const {
+    if (p.flag[i] == kFrozen)
+      d.frozen = true;
+    else
+      d.add(p.x[i] - x_ref_[i], p.radius[i] - r_ref_[i]);
+  }
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint
   /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any

@@ -257,17 +257,11 @@ void System::step_once() {
   // old centre, then translated), and their displacement since the last list build, for the
   // rebuild decision (the reduction is exact: the same on any number of threads).
   const bool tracked = nl.has_reference(size_t(n));
-  const Vec3* const xr = nl.x_ref();
-  const double* const rr = nl.r_ref();
   const double t1 = time + dt;
   Drift drift;
 #pragma omp parallel for reduction(drift : drift) schedule(static) if (n > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
     const uint8_t f = P.flag[i];
-    if (f == kFrozen) {
-      drift.frozen = true;
-      continue;
-    }
     if (f == kFree) {
       P.v[i] += P.force[i] * (h / P.mass[i]);
       P.omega[i] += P.torque[i] * (h / P.inertia[i]);
@@ -283,7 +277,7 @@ void System::step_once() {
       P.v[i] = W.velocity_at(P.x[i], t1);
       P.omega[i] = W.omega;
     }
-    if (tracked) drift.add(P.x[i] - xr[i], P.radius[i] - rr[i]);
+    if (tracked) nl.add_drift(drift, P, size_t(i));  // frozen particles only mark the set
   }
   time = t1;
   ++step;
