@@ -29,9 +29,10 @@ class AtomicWriter::FdBuf : public std::streambuf {
 
   int error() const { return err_; }
 
-  /// Flushes and closes; returns 0 or the first errno seen.
-  int finish() {
+  /// Flushes (and with `durable`, fsyncs) and closes; returns 0 or the first errno seen.
+  int finish(bool durable) {
     flush_buffer();
+    if (durable && err_ == 0 && fd_ >= 0 && ::fsync(fd_) != 0) err_ = errno;
     if (fd_ >= 0 && ::close(fd_) != 0 && err_ == 0) err_ = errno;
     fd_ = -1;
     return err_;
@@ -87,7 +88,18 @@ class AtomicWriter::FdBuf : public std::streambuf {
   int err_ = 0;
 };
 
-AtomicWriter::AtomicWriter(std::filesystem::path path) : path_(std::move(path)) {
+/// fsync of the directory holding `p`, so that a rename into it is on disk.
+int sync_directory(const std::filesystem::path& p) {
+  std::filesystem::path dir = p.parent_path();
+  if (dir.empty()) dir = ".";
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return errno;
+  const int err = ::fsync(fd) != 0 ? errno : 0;
+  ::close(fd);
+  return err;
+}
+
+AtomicWriter::AtomicWriter(std::filesystem::path path, Sync sync) : path_(std::move(path)), sync_(sync) {
   // Same directory as the target so that rename() never crosses a file system.
   tmp_ = path_;
   tmp_ += ".tmp." + std::to_string(::getpid());
@@ -110,7 +122,7 @@ void AtomicWriter::discard() noexcept {
 void AtomicWriter::commit() {
   if (committed_) throw std::logic_error("AtomicWriter::commit called twice for " + path_.string());
   os_->flush();
-  if (const int err = buf_->finish(); err != 0) {
+  if (const int err = buf_->finish(sync_ == Sync::durable); err != 0) {
     discard();
     throw io_error("cannot write", path_, err);
   }
@@ -120,10 +132,14 @@ void AtomicWriter::commit() {
     throw io_error("cannot rename temporary file onto", path_, err);
   }
   committed_ = true;
+  // The new file is in place (the old one is gone): a failure here only means the rename may
+  // not survive a power cut, which the caller is told about.
+  if (sync_ == Sync::durable)
+    if (const int err = sync_directory(path_); err != 0) throw io_error("cannot sync the directory of", path_, err);
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
-  AtomicWriter w(path);
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes, Sync sync) {
+  AtomicWriter w(path, sync);
   w.write(bytes);
   w.commit();
 }

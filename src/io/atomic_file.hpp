@@ -8,11 +8,20 @@
 
 namespace cohdem {
 
+/// How far a committed file must have reached when commit() returns.
+///  - Sync::none: the rename is done; a killed process cannot leave a half-written file, but
+///    after a power cut or kernel crash the file system may still hold the old file or (on
+///    some file systems) an empty new one. Enough for frames, series and summaries, which a
+///    rerun rewrites.
+///  - Sync::durable: the data are fsync'ed before the rename and the directory after it, so
+///    once commit() returns the new file survives a power cut. For checkpoints: a resume must
+///    find either the previous checkpoint or the complete new one.
+enum class Sync { none, durable };
+
 /// Writes `bytes` to `path.tmp.<pid>` in the same directory, then renames it over `path`
-/// (rename within one file system is atomic on POSIX). No fsync: this protects against a
-/// killed process, not against a power cut. Throws std::runtime_error naming the path and
-/// the errno text; on failure `path` is left as it was and the temp file is removed.
-void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
+/// (rename within one file system is atomic on POSIX). Throws std::runtime_error naming the
+/// path and the errno text; on failure `path` is left as it was and the temp file is removed.
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes, Sync sync = Sync::none);
 
 /// Streams a file into `path.tmp.<pid>`; `commit()` renames it over the target. If the writer
 /// is destroyed without a commit (exception, early return) the temp file is removed and the
@@ -21,7 +30,7 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view bytes
 class AtomicWriter {
  public:
   /// Opens the temp file. Throws std::runtime_error if it cannot be created.
-  explicit AtomicWriter(std::filesystem::path path);
+  explicit AtomicWriter(std::filesystem::path path, Sync sync = Sync::none);
   ~AtomicWriter();
   AtomicWriter(const AtomicWriter&) = delete;
   AtomicWriter& operator=(const AtomicWriter&) = delete;
@@ -50,6 +59,7 @@ class AtomicWriter {
   std::filesystem::path path_, tmp_;
   std::unique_ptr<FdBuf> buf_;
   std::unique_ptr<std::ostream> os_;
+  Sync sync_;
   bool committed_ = false;
 };
 

@@ -102,7 +102,7 @@ void write_checkpoint(const std::filesystem::path& path, const System& s, const 
   const NeighborList::Reference ref = s.nl.reference();
   o.vec(ref.x); o.vec(ref.r); o.vec(ref.wall);
   o.str(app_state);
-  write_file_atomic(path, o.bytes());
+  write_file_atomic(path, o.bytes(), Sync::durable);
 }
 
 std::string read_checkpoint(const std::filesystem::path& path, System& s) {

@@ -15,8 +15,9 @@
 
 namespace cohdem {
 
-/// Writes the checkpoint atomically (temp file + rename), with an application's own state
-/// (opaque bytes) when given.
+/// Writes the checkpoint atomically and durably (temp file, fsync, rename, fsync of the
+/// directory: after a kill or a power cut the path holds the previous checkpoint or the
+/// complete new one), with an application's own state (opaque bytes) when given.
 void write_checkpoint(const std::filesystem::path& path, const System& s, const std::string& app_state = {});
 
 /// Restores a checkpoint into `s`, which must be built from the same case (materials, model,

@@ -1,5 +1,7 @@
 #include "io/csv.hpp"
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -119,6 +121,11 @@ void CsvWriter::row(std::span<const double> values) {
 void CsvWriter::flush() {
   since_flush_ = 0;
   if (std::fflush(file_.get()) != 0) throw io_error("cannot write", path_, errno);
+}
+
+void CsvWriter::sync() {
+  flush();
+  if (::fsync(::fileno(file_.get())) != 0) throw io_error("cannot sync", path_, errno);
 }
 
 // ---------------------------------------------------------------- CsvTable

@@ -34,6 +34,9 @@ class CsvWriter {
 
   /// Pushes buffered rows to the OS. Throws std::runtime_error on a write error.
   void flush();
+  /// flush(), then fsync: every row written so far survives a power cut (called before a
+  /// checkpoint, so that a resume finds every row up to it). Throws std::runtime_error.
+  void sync();
 
   const std::vector<std::string>& columns() const { return columns_; }
   size_t rows_written() const { return rows_; }

@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -49,6 +51,45 @@ double audit_velocity(const Case& c) {
 }
 
 namespace {
+
+/// The text of a run's series.csv up to `step`: the header and the complete rows whose step is
+/// at most `step`. The killed run that is being resumed went on writing after its checkpoint,
+/// so its last row may be cut off mid-line; rows up to the checkpoint are complete (synced
+/// before the checkpoint was written). The rows are in step order: reading stops at the first
+/// row past `step` or without its line end.
+std::string series_up_to(const std::filesystem::path& path, uint64_t step) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw RunError("cannot read " + path.string() + " to continue its series");
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  size_t end = text.find('\n');
+  if (end == std::string::npos) return text;  // the header alone (CsvTable reports a bad one)
+  std::optional<size_t> col;  // index of the step column
+  {
+    size_t c = 0, a = 0;
+    const std::string_view head(text.data(), end);
+    while (a <= head.size()) {
+      const size_t b = std::min(head.find(',', a), head.size());
+      std::string_view name = head.substr(a, b - a);
+      while (!name.empty() && (name.front() == ' ' || name.front() == '"')) name.remove_prefix(1);
+      while (!name.empty() && (name.back() == ' ' || name.back() == '"' || name.back() == '\r')) name.remove_suffix(1);
+      if (name == "step") col = c;
+      ++c;
+      a = b + 1;
+    }
+  }
+  size_t keep = end + 1;
+  while (col && keep < text.size()) {
+    const size_t eol = text.find('\n', keep);
+    if (eol == std::string::npos) break;  // cut off mid-line
+    size_t a = keep;
+    for (size_t c = 0; c < *col && a < eol; ++c) a = std::min(text.find(',', a), eol) + 1;
+    // (a row with too few fields is kept: CsvTable reports it with its line number)
+    if (a < eol && std::strtod(text.c_str() + a, nullptr) > double(step)) break;
+    keep = eol + 1;
+  }
+  text.resize(col ? keep : text.size());
+  return text;
+}
 
 std::string hms(double s) {
   if (!std::isfinite(s) || s < 0) return "--:--:--";
@@ -261,7 +302,7 @@ int run_case(const Case& c, const RunOptions& opt) {
   nlohmann::json frames = nlohmann::json::array();
   if (resuming) {
     if (fs::exists(out / "series.csv")) {
-      const CsvTable t = CsvTable::read(out / "series.csv");
+      const CsvTable t = CsvTable::parse(series_up_to(out / "series.csv", s.step), (out / "series.csv").string());
       if (t.has("step"))
         for (size_t r = 0; r < t.num_rows(); ++r) {
           if (t.column("step")[r] > double(s.step)) break;
@@ -288,10 +329,14 @@ int run_case(const Case& c, const RunOptions& opt) {
   frames = nlohmann::json::array();
   for (const auto& e : pvd_p.entries()) frames.push_back({{"time", e.time}, {"particles", e.file}});
   for (size_t q = 0; q < pvd_w.entries().size() && q < frames.size(); ++q) frames[q]["walls"] = pvd_w.entries()[q].file;
+  // Every series row up to this step is on disk before the checkpoint is: a run killed (or
+  // a machine that loses power) after the checkpoint resumes with the whole series.
   auto checkpoint = [&]() {
+    csv.sync();
     write_checkpoint(out / "checkpoint.bin", s);
     write_file_atomic(out / "checkpoint.json",
-                      nlohmann::json({{"step", s.step}, {"time", s.time}, {"frames", frames}}).dump(1) + "\n");
+                      nlohmann::json({{"step", s.step}, {"time", s.time}, {"frames", frames}}).dump(1) + "\n",
+                      Sync::durable);
   };
   auto write_frame = [&]() {
     if (!c.output.vtk) return;
@@ -347,7 +392,6 @@ int run_case(const Case& c, const RunOptions& opt) {
     }
     if (opt.max_wall_time >= 0 && k < nsteps && std::chrono::duration<double>(now - t0).count() >= opt.max_wall_time) {
       check_finite(s);
-      csv.flush();
       checkpoint();
       spdlog::warn("wall-time limit of {} s reached: stopped at step {} of {} (t = {:.6g} s); continue with --resume {}",
                    opt.max_wall_time, k, nsteps, s.time, (out / "checkpoint.bin").string());
@@ -367,7 +411,6 @@ int run_case(const Case& c, const RunOptions& opt) {
   const auto t_loop = clock::now();
   const double loop_s = std::chrono::duration<double>(t_loop - t0).count();
   check_finite(s);
-  csv.flush();
   checkpoint();  // lets a user extend the duration and resume
   const auto t_end = clock::now();
   const double wall_s = std::chrono::duration<double>(t_end - t0).count();

@@ -128,6 +128,17 @@ TEST_F(IoAtomicFile, WriteReplacesAndLeavesNoTemp) {
   EXPECT_TRUE(temp_files().empty());
 }
 
+// Sync::durable adds fsyncs (of the file before the rename, of its directory after): what is
+// on disk must be the same as without them. (Surviving a power cut cannot be tested here;
+// tests/cli/resume_killed.sh covers the kill -9 side of checkpoints.)
+TEST_F(IoAtomicFile, DurableWriteReplacesAndLeavesNoTemp) {
+  const auto p = dir / "ck.bin";
+  write_file_atomic(p, "first", Sync::durable);
+  write_file_atomic(p, std::string(100000, 'x'), Sync::durable);
+  EXPECT_EQ(slurp(p), std::string(100000, 'x'));
+  EXPECT_TRUE(temp_files().empty());
+}
+
 TEST_F(IoAtomicFile, UncommittedWriterKeepsOldFile) {
   const auto p = dir / "a.txt";
   write_file_atomic(p, "old contents");
@@ -390,6 +401,18 @@ TEST_F(CsvIo, DefaultPrecisionIsTenDigits) {
     w.row({1.0 / 3.0});
   }
   EXPECT_EQ(slurp(p), "x\n0.3333333333\n");
+}
+
+// sync() puts every row written so far into the file (a checkpoint relies on it), while the
+// writer stays open and its buffer would otherwise hold them (flush_every = 100).
+TEST_F(CsvIo, SyncWritesBufferedRows) {
+  const auto p = dir / "s.csv";
+  CsvWriter w(p, {"step"}, 100);
+  w.row({1.0});
+  w.row({2.0});
+  EXPECT_EQ(slurp(p), "step\n");  // still buffered
+  w.sync();
+  EXPECT_EQ(slurp(p), "step\n1\n2\n");
 }
 
 TEST_F(CsvIo, ReaderSkipsCommentsAndBlankLines) {
