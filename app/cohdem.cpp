@@ -93,6 +93,9 @@ int main(int argc, char** argv) {
     a->add_option("--out", bo.out_dir, "output folder (overrides [output] folder)");
     a->add_option("--threads", bo.threads, "OpenMP threads")->check(CLI::NonNegativeNumber);
     a->add_flag("--quiet", bo.quiet, "no progress lines");
+    a->add_flag("--resume", bo.resume,
+                "continue from the checkpoint of the long stage (fill, thermal cycling) in the output folder, "
+                "written every [output] checkpoint_interval s (same case and --set options)");
   };
   beds::PackingOptions po;
   std::string seeds = "1";

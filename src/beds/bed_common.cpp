@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "analysis/packing_profile.hpp"
 #include "core/error.hpp"
+#include "io/checkpoint.hpp"
 #include "io/runner.hpp"
 #include "sim/timestep_audit.hpp"
 
@@ -52,13 +55,18 @@ std::unique_ptr<System> clone(const Case& c, const System& src) {
 
 void advance(System& s, double duration, const std::string& label, bool quiet,
              const std::function<void(System&)>& sample, uint64_t every) {
+  advance_steps(s, uint64_t(std::llround(duration / s.cfg.dt)), label, quiet, sample, every);
+}
+
+void advance_steps(System& s, uint64_t n, const std::string& label, bool quiet, const std::function<void(System&)>& sample,
+                   uint64_t every, const std::function<void(System&)>& after) {
   using clock = std::chrono::steady_clock;
-  const uint64_t n = uint64_t(std::llround(duration / s.cfg.dt));
   const auto t0 = clock::now();
   auto last = t0;
   for (uint64_t k = 1; k <= n; ++k) {
     s.step_once();
     if (sample && every && k % every == 0) sample(s);
+    if (after) after(s);
     if (k % 1000 == 0 || k == n) {
       const Vec3 x = s.particles.size() ? s.particles.x[0] : Vec3{};
       if (!std::isfinite(x.x + x.y + x.z + s.kinetic_energy()))
@@ -72,6 +80,84 @@ void advance(System& s, double duration, const std::string& label, bool quiet,
                    s.particles.size(), s.kinetic_energy(), el / k * (n - k));
     }
   }
+}
+
+namespace {
+
+/// What a stage checkpoint must have been written with to be resumed: the case file's text,
+/// the --set options and the seed. Options that do not change results are left out: the
+/// [output] keys (folder, checkpoint interval, ...) and the thread count.
+nlohmann::json stage_fingerprint(const Case& c, const BedOptions& o) {
+  std::ifstream f(c.file, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  std::vector<std::string> sets;
+  for (const std::string& a : o.sets)
+    if (a.rfind("output.", 0) != 0 && a.rfind("simulation.threads=", 0) != 0) sets.push_back(a);
+  return {{"case_text", text}, {"sets", sets}, {"seed", c.seed}};
+}
+
+}  // namespace
+
+Stage open_stage(const Case& c, const BedOptions& o, const std::filesystem::path& ckpt) {
+  Stage st;
+  if (!o.resume || !std::filesystem::exists(ckpt)) {
+    if (o.resume) spdlog::warn("--resume: no checkpoint {} yet: this stage starts from the beginning", ckpt.string());
+    st.s = build_checked(c);
+    return st;
+  }
+  auto s = build_system(c, false);
+  s->cfg.record_contacts = true;
+  const std::string blob = read_checkpoint(ckpt, *s);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::from_cbor(std::vector<uint8_t>(blob.begin(), blob.end()));
+    if (!j.contains("fingerprint") || !j.contains("complete")) throw std::runtime_error("no stage state");
+  } catch (const std::exception&) {
+    throw InputError(ckpt.string(), 0, "--resume", "not a checkpoint of a packed-bed protocol stage");
+  }
+  const nlohmann::json now = stage_fingerprint(c, o);
+  for (const char* key : {"case_text", "sets", "seed"})
+    if (j["fingerprint"][key] != now[key])
+      throw InputError(ckpt.string(), 0, "--resume",
+                       std::string("written with another ") +
+                           (key == std::string("case_text") ? "case file text" : key == std::string("sets") ? "set of --set options" : "seed") +
+                           " than this run's (" + c.file + "): resume with the same case and options, or start without --resume");
+  st.s = std::move(s);
+  st.resumed = true;
+  st.complete = j["complete"].get<bool>();
+  st.state = j.value("state", nlohmann::json());
+  spdlog::info("resuming from {}: step {} (t = {:.6g} s){}", ckpt.string(), st.s->step, st.s->time,
+               st.complete ? ", the stage had ended" : "");
+  return st;
+}
+
+void run_stage(Stage& st, const Case& c, const BedOptions& o, const std::filesystem::path& ckpt, const std::string& label,
+               const std::function<void(System&)>& sample, uint64_t every, const std::function<nlohmann::json()>& state) {
+  using clock = std::chrono::steady_clock;
+  System& s = *st.s;
+  const uint64_t n = uint64_t(std::llround(c.duration / s.cfg.dt));
+  const nlohmann::json fp = stage_fingerprint(c, o);
+  auto write = [&](bool complete) {
+    nlohmann::json j{{"fingerprint", fp}, {"complete", complete}, {"stage", label}};
+    if (state) j["state"] = state();
+    const std::vector<uint8_t> bytes = nlohmann::json::to_cbor(j);
+    write_checkpoint(ckpt, s, std::string(bytes.begin(), bytes.end()));
+  };
+  auto last = clock::now();
+  const double interval = c.output.checkpoint_interval;
+  // Samples at the steps that are multiples of `every` counted from t = 0, so that a resumed
+  // stage samples where the uninterrupted one did.
+  auto after = [&](System& sys) {
+    if (sample && every && sys.step % every == 0) sample(sys);
+    if (interval <= 0) return;
+    const auto now = clock::now();
+    if (std::chrono::duration<double>(now - last).count() < interval || sys.step >= n) return;
+    write(false);
+    last = now;
+  };
+  if (s.step < n) advance_steps(s, n - s.step, label, o.quiet, {}, 0, after);
+  if (!st.complete) write(true);
+  st.complete = true;
 }
 
 size_t find_wall(const Case& c, const System& s, const std::string& name, const std::string& option) {

@@ -2,10 +2,13 @@
 // the case, cloning a settled bed, advancing with progress lines, trimming, measuring the bed
 // in a vertical pipe, and small output helpers.
 #pragma once
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "io/case_file.hpp"
 #include "sim/system.hpp"
@@ -18,6 +21,7 @@ struct BedOptions {
   std::string out_dir;            ///< overrides [output] folder
   int threads = 0;
   bool quiet = false;
+  bool resume = false;            ///< continue the long stage from its checkpoint in the output folder
 };
 
 /// Loads the case (with overrides and the thread count) and names the output folder.
@@ -35,6 +39,29 @@ std::unique_ptr<System> clone(const Case& c, const System& src);
 /// every few seconds of wall time unless quiet. Throws RunError on a non-finite state.
 void advance(System& s, double duration, const std::string& label, bool quiet,
              const std::function<void(System&)>& sample = {}, uint64_t every = 0);
+/// The same for `n` steps, calling `after` (when given) after every step, after `sample`.
+void advance_steps(System& s, uint64_t n, const std::string& label, bool quiet, const std::function<void(System&)>& sample,
+                   uint64_t every, const std::function<void(System&)>& after = {});
+
+/// A protocol's long stage (the fill of a bed, a thermal cycling run: the case's `duration`
+/// from its start), resumable. Without --resume, or with --resume but no checkpoint at `ckpt`
+/// yet, the system is built from the case; with --resume and a checkpoint, from the
+/// checkpoint, which must have been written by the same case file text, --set options and
+/// seed (else InputError naming the checkpoint): `resumed`, `complete` (the stage had ended)
+/// and the protocol's own `state` saved with it (e.g. its samples so far) are then set.
+struct Stage {
+  std::unique_ptr<System> s;
+  bool resumed = false, complete = false;
+  nlohmann::json state;
+};
+Stage open_stage(const Case& c, const BedOptions& o, const std::filesystem::path& ckpt);
+/// Runs the stage to the end of the case's duration (steps counted from t = 0, so a resumed
+/// stage ends at the same step, bit for bit as if never stopped), writing an atomic, fsync'ed
+/// checkpoint to `ckpt` every [output] checkpoint_interval seconds of wall time and at the end
+/// (marked complete), with `state()` when given. `sample` as for advance().
+void run_stage(Stage& st, const Case& c, const BedOptions& o, const std::filesystem::path& ckpt, const std::string& label,
+               const std::function<void(System&)>& sample = {}, uint64_t every = 0,
+               const std::function<nlohmann::json()>& state = {});
 
 /// Index of the wall called `name`; throws InputError naming the case file otherwise.
 size_t find_wall(const Case& c, const System& s, const std::string& name, const std::string& option);

@@ -67,17 +67,21 @@ void check_pipe(const Case& c, const System& s, size_t pipe, size_t base) {
 PipeFill fill_pipe(const BedOptions& o, const std::string& pipe, const std::string& base) {
   PipeFill f;
   f.c = load(o);
-  f.s = build_checked(f.c);
+  f.out = out_folder(o, f.c);
+  const fs::path ckpt = fs::path(f.out) / "fill_checkpoint.bin";
+  Stage st = open_stage(f.c, o, ckpt);
+  f.s = std::move(st.s);
   f.pipe = find_wall(f.c, *f.s, pipe, "--pipe");
   f.base = find_wall(f.c, *f.s, base, "--base");
   check_pipe(f.c, *f.s, f.pipe, f.base);
-  f.out = out_folder(o, f.c);
   fs::create_directories(f.out);
   f.R = f.s->walls[f.pipe].radius;
   f.z0 = f.s->walls[f.base].point.z;
   f.g = norm(f.c.cfg.gravity);
   spdlog::info("fill: {} particles, {:.3g} s", f.s->particles.size(), f.c.duration);
-  advance(*f.s, f.c.duration, "fill", o.quiet);
+  st.s = std::move(f.s);
+  run_stage(st, f.c, o, ckpt, "fill");
+  f.s = std::move(st.s);
   f.bed = measure_pipe_bed(*f.s, f.R, f.z0);
   f.d = 2 * mean_radius(*f.s);
   return f;

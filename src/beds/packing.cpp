@@ -73,9 +73,11 @@ int run_packing(const BedOptions& o, const PackingOptions& p) {
   for (int seed : p.seeds) {
     Case c = c0;
     c.seed = uint64_t(seed);
-    auto s = build_checked(c);
-    spdlog::info("seed {}: {} particles, {:.3g} s", seed, s->particles.size(), c.duration);
-    advance(*s, c.duration, "seed " + std::to_string(seed), o.quiet);
+    const fs::path ckpt = out / ("seed" + std::to_string(seed) + "_checkpoint.bin");
+    Stage st = open_stage(c, o, ckpt);
+    spdlog::info("seed {}: {} particles, {:.3g} s", seed, st.s->particles.size(), c.duration);
+    run_stage(st, c, o, ckpt, "seed " + std::to_string(seed));
+    const std::unique_ptr<System> s = std::move(st.s);
     const ParticleStore& P = s->particles;
     d = 2 * mean_radius(*s);
     std::vector<Vec3> x;
