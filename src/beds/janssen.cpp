@@ -46,11 +46,19 @@ nlohmann::json stress_fit(const SliceStresses& s, double z0, double top, double 
   }
   nlohmann::json j;
   if (sv.size() < 2) return j;
-  const RatioFit k = fit_stress_ratio(sv, sw);
-  const RatioFit kb = fit_stress_ratio(sv, sh);
-  const RatioFit mu = fit_wall_friction(sw, tw);
-  j = {{"k_wall", k.value}, {"k_bulk", kb.value}, {"mu_wall_mobilised", mu.value}, {"mu_k", mu.value * k.value},
-       {"slices", sv.size()}};
+  // A bed that carries no load in its slices (not settled: the fill too short) cannot be
+  // fitted; the tables and plots already measured are still written, with the reason here.
+  try {
+    const RatioFit k = fit_stress_ratio(sv, sw);
+    const RatioFit kb = fit_stress_ratio(sv, sh);
+    const RatioFit mu = fit_wall_friction(sw, tw);
+    j = {{"k_wall", k.value}, {"k_bulk", kb.value}, {"mu_wall_mobilised", mu.value}, {"mu_k", mu.value * k.value},
+         {"slices", sv.size()}};
+  } catch (const std::invalid_argument& e) {
+    const std::string why = std::string(e.what()) + " (is the bed settled? a longer fill, simulation.duration, may help)";
+    spdlog::warn("stress fit of the {} bed skipped: {}", piston ? "wall-down" : "wall-up", why);
+    j = {{"skipped", why}, {"slices", sv.size()}};
+  }
   return j;
 }
 
@@ -305,8 +313,13 @@ int run_janssen(const BedOptions& o, const JanssenOptions& jo) {
   }
   if (!panels.empty()) plot_png_panels(out / "janssen_stress.png", panels, int(panels.size()));
   write_file_atomic(out / "janssen.json", j.dump(2) + "\n");
-  if (j.contains("wall_up")) fmt::print("wall up: mu k = {:.4f} (paper 0.232)\n", double(j["wall_up"]["mu_k"]));
-  if (j.contains("wall_down")) fmt::print("wall down: mu k = {:.4f}\n", double(j["wall_down"]["mu_k"]));
+  // A fit whose minimum lies at the edge of its search range says so (an unsettled bed with
+  // no load on the pedestal gives one).
+  auto bound = [&](const char* key) {
+    return j[key].value("at_bound", false) ? " (at the bound of the search range: not a fit)" : "";
+  };
+  if (j.contains("wall_up")) fmt::print("wall up: mu k = {:.4f} (paper 0.232){}\n", double(j["wall_up"]["mu_k"]), bound("wall_up"));
+  if (j.contains("wall_down")) fmt::print("wall down: mu k = {:.4f}{}\n", double(j["wall_down"]["mu_k"]), bound("wall_down"));
   fmt::print("{}\n", (out / "janssen.json").string());
   return 0;
 }
