@@ -276,8 +276,18 @@ int run_case(const Case& c, const RunOptions& opt) {
   auto sys = build_system(c, !resuming);
   System& s = *sys;
   if (resuming) {
-    if (!read_checkpoint(opt.resume, s).empty())
-      throw InputError(opt.resume, 0, "--resume", "this checkpoint was written by the ring shear tester: resume it with its ring shear case");
+    if (const std::string app = read_checkpoint(opt.resume, s); !app.empty()) {
+      // An application's checkpoint: a packed-bed protocol's stage (CBOR with a "complete"
+      // flag) or the ring shear tester's.
+      bool bed = false;
+      try {
+        bed = nlohmann::json::from_cbor(std::vector<uint8_t>(app.begin(), app.end())).contains("complete");
+      } catch (const std::exception&) {
+      }
+      throw InputError(opt.resume, 0, "--resume",
+                       bed ? "this checkpoint was written by a packed-bed protocol: resume it with the same `cohdem bed ...` command and --resume"
+                           : "this checkpoint was written by the ring shear tester: resume it with its ring shear case");
+    }
     spdlog::info("resuming from {} at step {} (t = {:.6g} s)", opt.resume, s.step, s.time);
   }
   const auto audit = audit_timestep(s, min_radius_by_material(s), audit_velocity(c));

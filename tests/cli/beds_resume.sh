@@ -62,5 +62,12 @@ n=$((n + 1))
 if [ $rc = 2 ] && grep -q "thermal_cycle_checkpoint.bin.*--resume.*--set options" "$work/err"; then echo "ok   other options refused: $(cat "$work/err")"
 else echo "FAIL other options: exit $rc, $(cat "$work/err")"; fail=$((fail + 1)); fi
 
+# A stage checkpoint given to `cohdem run --resume` is refused, naming what wrote it.
+"$bin" run examples/beds/thermal_cycle.toml --set simulation.duration=0.2 --set insert.0.count=300 \
+  --resume "$work/tc/thermal_cycle_checkpoint.bin" --quiet --out "$work/r" 2> "$work/err"; rc=$?
+n=$((n + 1))
+if [ $rc = 2 ] && grep -q "written by a packed-bed protocol" "$work/err"; then echo "ok   run --resume of a stage checkpoint refused: $(cat "$work/err")"
+else echo "FAIL run --resume of a stage checkpoint: exit $rc, $(cat "$work/err")"; fail=$((fail + 1)); fi
+
 echo "$((n - fail)) passed, $fail failed"
 [ $fail = 0 ]
