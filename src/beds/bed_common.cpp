@@ -116,12 +116,11 @@ Stage open_stage(const Case& c, const BedOptions& o, const std::filesystem::path
     throw InputError(ckpt.string(), 0, "--resume", "not a checkpoint of a packed-bed protocol stage");
   }
   const nlohmann::json now = stage_fingerprint(c, o);
-  for (const char* key : {"case_text", "sets", "seed"})
+  for (const auto& [key, what] : {std::pair{"case_text", "case file text"}, {"sets", "set of --set options"}, {"seed", "seed"}})
     if (j["fingerprint"][key] != now[key])
       throw InputError(ckpt.string(), 0, "--resume",
-                       std::string("written with another ") +
-                           (key == std::string("case_text") ? "case file text" : key == std::string("sets") ? "set of --set options" : "seed") +
-                           " than this run's (" + c.file + "): resume with the same case and options, or start without --resume");
+                       std::string("written with another ") + what + " than this run's (" + c.file +
+                           "): resume with the same case and options, or start without --resume");
   st.s = std::move(s);
   st.resumed = true;
   st.complete = j["complete"].get<bool>();

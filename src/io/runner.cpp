@@ -8,8 +8,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -52,42 +50,16 @@ double audit_velocity(const Case& c) {
 
 namespace {
 
-/// The text of a run's series.csv up to `step`: the header and the complete rows whose step is
-/// at most `step`. The killed run that is being resumed went on writing after its checkpoint,
-/// so its last row may be cut off mid-line; rows up to the checkpoint are complete (synced
-/// before the checkpoint was written). The rows are in step order: reading stops at the first
-/// row past `step` or without its line end.
-std::string series_up_to(const std::filesystem::path& path, uint64_t step) {
+/// The text of a run's series.csv without a row cut off mid-line: the killed run that is
+/// being resumed went on writing after its checkpoint, so its last row may lack its line end.
+/// Rows up to the checkpoint are complete (synced before the checkpoint was written); the
+/// caller keeps those up to the checkpoint's step.
+std::string series_complete_rows(const std::filesystem::path& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw RunError("cannot read " + path.string() + " to continue its series");
   std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  size_t end = text.find('\n');
-  if (end == std::string::npos) return text;  // the header alone (CsvTable reports a bad one)
-  std::optional<size_t> col;  // index of the step column
-  {
-    size_t c = 0, a = 0;
-    const std::string_view head(text.data(), end);
-    while (a <= head.size()) {
-      const size_t b = std::min(head.find(',', a), head.size());
-      std::string_view name = head.substr(a, b - a);
-      while (!name.empty() && (name.front() == ' ' || name.front() == '"')) name.remove_prefix(1);
-      while (!name.empty() && (name.back() == ' ' || name.back() == '"' || name.back() == '\r')) name.remove_suffix(1);
-      if (name == "step") col = c;
-      ++c;
-      a = b + 1;
-    }
-  }
-  size_t keep = end + 1;
-  while (col && keep < text.size()) {
-    const size_t eol = text.find('\n', keep);
-    if (eol == std::string::npos) break;  // cut off mid-line
-    size_t a = keep;
-    for (size_t c = 0; c < *col && a < eol; ++c) a = std::min(text.find(',', a), eol) + 1;
-    // (a row with too few fields is kept: CsvTable reports it with its line number)
-    if (a < eol && std::strtod(text.c_str() + a, nullptr) > double(step)) break;
-    keep = eol + 1;
-  }
-  text.resize(col ? keep : text.size());
+  const size_t eol = text.rfind('\n');
+  text.resize(eol == std::string::npos ? text.size() : eol + 1);
   return text;
 }
 
@@ -312,7 +284,7 @@ int run_case(const Case& c, const RunOptions& opt) {
   nlohmann::json frames = nlohmann::json::array();
   if (resuming) {
     if (fs::exists(out / "series.csv")) {
-      const CsvTable t = CsvTable::parse(series_up_to(out / "series.csv", s.step), (out / "series.csv").string());
+      const CsvTable t = CsvTable::parse(series_complete_rows(out / "series.csv"), (out / "series.csv").string());
       if (t.has("step"))
         for (size_t r = 0; r < t.num_rows(); ++r) {
           if (t.column("step")[r] > double(s.step)) break;
