@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include "fixture.hpp"
+#include "sim/force_kernel.hpp"
 
 using namespace cohdem;
 using namespace cohdem::testing;
@@ -194,6 +195,64 @@ TEST(Threads, PairForcesAreRecordedOnRequest) {
         }
       EXPECT_EQ(live, 1u);
     }
+  }
+  omp_set_num_threads(1);
+}
+
+// The force loop screens and evaluates the list in batches of kBatch entries; a row longer
+// than a batch (a large particle among small ones) is split over several, and its sums must
+// start from zero once and take every entry once. One sphere of radius 15 mm (the first
+// added: the lowest id, so its row holds all its neighbours) in a cubic lattice of spheres of
+// radius 1 mm at spacing 1.9 mm (each overlaps its lattice neighbours by 0.1 mm; those
+// within 0.05 mm of the large sphere's surface are left out, so every contact carries at
+// least 0.5 N), all at rest, linear springs, no gravity: every contact force is kn delta
+// along the normal (no damping at rest, no tangential motion), so each particle's force is
+// the sum of kn delta n over the spheres it overlaps, computed here pair by pair. Reference
+// and kernel differ only in the order of the sums and in the normal's rounding: about 1e-15
+// N per term and a few dozen terms of 0.5 to 3 N each; 1e-9 N is far below a missed or
+// doubled contact (>= 0.5 N).
+TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
+  const double kn = 1e4, R = 15e-3, r = 1e-3, a = 1.9e-3;
+  for (int threads : {1, 2, 3}) {
+    auto s = make_system({{"glass", 2500, 0, 0}}, "linear", "none", params({{"kn", kn}, {"e", 1.0}, {"mu", 0.5}}),
+                         1e-7, {0, 0, 0}, 2e-3);
+    s->cfg.threads = threads;
+    s->cfg.parallel_min = 0;
+    s->add_particle(0, R, {0, 0, 0});
+    for (int ix = -10; ix <= 10; ++ix)
+      for (int iy = -10; iy <= 10; ++iy)
+        for (int iz = -10; iz <= 10; ++iz) {
+          const Vec3 q{ix * a, iy * a, iz * a};
+          const double gap = norm(q) - (R + r);
+          if ((gap >= -0.2e-3 && gap <= -0.05e-3) || (gap >= 0.05e-3 && norm(q) <= R + 4e-3)) s->add_particle(0, r, q);
+        }
+    s->prepare();
+    const ParticleStore& P = s->particles;
+    const size_t n = P.size();
+    size_t longest = 0;
+    for (size_t i = 0; i < n; ++i) longest = std::max<size_t>(longest, s->nl.start[i + 1] - s->nl.start[i]);
+    EXPECT_GT(longest, size_t(kBatch)) << "the test needs a row longer than one batch";
+    std::vector<Vec3> ref(n);
+    size_t contacts = 0;
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = i + 1; j < n; ++j) {
+        const Vec3 d = P.x[i] - P.x[j];
+        const double dist = norm(d), delta = P.radius[i] + P.radius[j] - dist;
+        if (delta <= 0) continue;
+        const Vec3 f = d * (kn * delta / dist);
+        ref[i] += f;
+        ref[j] -= f;
+        ++contacts;
+      }
+    EXPECT_GT(contacts, size_t(kBatch));
+    size_t bad = 0;
+    double worst = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const double e = norm(P.force[i] - ref[i]);
+      worst = std::max(worst, e);
+      bad += !(e <= 1e-9);
+    }
+    EXPECT_EQ(bad, 0u) << threads << " threads, worst difference " << worst << " N";
   }
   omp_set_num_threads(1);
 }
