@@ -136,17 +136,24 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     }
     // The touching entries' history and partners' reverse sums, velocities and spins are
     // far apart in memory (j runs over the neighbouring cells; touching entries are one in
-    // five or seven, too sparse for the hardware prefetcher): ask for them all before the
-    // first contact needs them, so their misses overlap.
-    for (uint32_t h = 0; h < nh; ++h) {
+    // five or seven, too sparse for the hardware prefetcher): they are asked for D contacts
+    // ahead, so their misses overlap with the evaluation (asking for the whole batch at once
+    // was 2-6 % slower: more requests in flight than the core keeps).
+    auto pf = [&](const uint32_t h) __attribute__((always_inline)) {
       const uint32_t k = hk[h], j = jdx[k];
       __builtin_prefetch(hs + k, 1, 3);
       if (keep_pair) __builtin_prefetch(res + k, 1, 3);
       __builtin_prefetch(rev + j, 1, 3);
       __builtin_prefetch(v + j, 0, 3);
       __builtin_prefetch(omega + j, 0, 3);
-    }
+    };
+    constexpr uint32_t D = 8;
+    for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
+    // Written in full by every evaluation that returns true (read only then): declared once,
+    // so its 152-byte zero fill (a `rep stos`) is not repeated per contact.
+    PairForce out;
     for (uint32_t h = 0; h < nh; ++h) {
+      if (h + D < nh) pf(h + D);
       const uint32_t k = hk[h], j = jdx[k], i = hrow[h];
       const double ri = radius[i], rj = radius[j];
       const double rsum = ri + rj;
@@ -173,7 +180,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       g.wrel = omega[i] - omega[j];
       g.dt = dt;
       g.want_a = want_a;
-      PairForce out;
       const bool alive = Law::evaluate(p(species[i], species[j]), g, hs[k], out);
       live[k] = alive;
       if (alive) {
