@@ -55,7 +55,7 @@ inline double limit_scale(double m2, double lim) {
   return over ? lim / std::sqrt(over ? m2 : 1.0) : 1.0;
 }
 
-inline void rotate_into_plane(Vec3& h, const Vec3& n) {
+COHDEM_INLINE void rotate_into_plane(Vec3& h, const Vec3& n) {
   const double m0 = norm2(h);
   if (!(m0 > 0)) return;
   const double hn = dot(n, h);

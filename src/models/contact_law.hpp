@@ -93,7 +93,7 @@ struct ContactLaw {
   static double reach(const Params& p, double rstar) { return N::reach(p.normal, rstar); }
 
   /// Evaluates one contact. Returns false (and resets the history) when there is none.
-  static bool evaluate(const Params& p, const PairGeom& g, State& s, PairForce& out) {
+  COHDEM_INLINE static bool evaluate(const Params& p, const PairGeom& g, State& s, PairForce& out) {
     NormalOut no;
     N::apply(p.normal, g, s.normal, no);
     if (!no.alive) {

@@ -19,7 +19,7 @@ struct RatioDamping {
       opt("beta_n", "-", 0, 0, kInf, "normal damping ratio, gamma_n = 2 beta_n sqrt(m* kn) (PFC dp_nratio)"),
       kRestitutionSpecs[1]};
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0]), p.get(specs[1]) != 0}; }
-  static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
+  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
     gamma = p.beta > 0 ? 2.0 * p.beta * std::sqrt(g.mstar * std::max(no.kn, 0.0)) : 0.0;
     return apply_limit(no.f_el, -gamma * g.vn, p.limit);
   }

@@ -50,7 +50,7 @@ struct LinearRestitutionDamping {
     return {limit ? beta_for_restitution(e, 1.0, true) : -l / std::sqrt(M_PI * M_PI + l * l), limit};
   }
   /// Returns the damping force (repulsive > 0); writes the damping coefficient gamma (N s/m).
-  static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
+  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
     gamma = 2.0 * p.beta * std::sqrt(g.mstar * no.kn);
     return apply_limit(no.f_el, -gamma * g.vn, p.limit);
   }
@@ -66,7 +66,7 @@ struct TsujiDamping {
     if (e >= 1.0) return {0.0, limit};
     return {beta_for_restitution(e, 1.5, limit), limit};
   }
-  static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
+  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
     gamma = 2.0 * p.beta * std::sqrt(g.mstar * no.kn);
     return apply_limit(no.f_el, -gamma * g.vn, p.limit);
   }
@@ -80,7 +80,7 @@ struct ViscousDamping {
       opt("gamma_n", "N s/m", 0, 0, kInf, "normal viscous damping coefficient"),
       opt("limit_damping", "0/1", 0, 0, 1, "1: damping never makes the normal force attractive")};
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0]), p.get(specs[1]) != 0}; }
-  static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
+  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double& gamma) {
     gamma = p.gamma_n;
     return apply_limit(no.f_el, -gamma * g.vn, p.limit);
   }

@@ -21,7 +21,7 @@ struct DmtNormal : NormalBase {
   static constexpr std::array specs = {kWorkOfAdhesion};
   static Params make(const ParamSet& p, const PairMaterial& m) { return {m.Estar, p.get(specs[0])}; }
   static double pull_off(const Params& p, double rstar) { return 2.0 * M_PI * p.w * rstar; }
-  static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
     o.alive = g.delta > 0;
     if (!o.alive) return;
     o.a = std::sqrt(g.rstar * g.delta);
@@ -30,7 +30,7 @@ struct DmtNormal : NormalBase {
     o.f_el = (2.0 / 3.0) * o.kn * g.delta - o.f_adh;
   }
   template <class P>
-  static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
 };
 
 }  // namespace cohdem

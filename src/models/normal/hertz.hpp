@@ -15,7 +15,7 @@ struct HertzNormal : NormalBase {
   static constexpr bool kHertzianStiffness = true;  // kn = 2 E* a, E* of the material pair
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial& m) { return {m.Estar}; }
-  static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
     o.alive = g.delta > 0;
     if (!o.alive) return;
     o.a = std::sqrt(g.rstar * g.delta);

@@ -62,7 +62,7 @@ struct JkrNormal : NormalBase {
     return 4.0 * p.Estar * a3 / (3.0 * R) - std::sqrt(8.0 * M_PI * p.w * p.Estar * a3);
   }
 
-  static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
     const double R = g.rstar;
     if (!s.formed) {
       if (!(g.delta > 0)) { o.alive = false; return; }
@@ -79,7 +79,7 @@ struct JkrNormal : NormalBase {
     o.f_adh = pull_off(p, R);
   }
   template <class P>
-  static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + 2.0 * o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + 2.0 * o.f_adh, 0.0); }
 };
 
 }  // namespace cohdem

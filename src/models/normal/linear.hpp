@@ -14,7 +14,7 @@ struct LinearNormal : NormalBase {
   static constexpr std::array specs = {
       req("kn", "N/m", 0, kInf, "normal spring stiffness", true)};
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0])}; }
-  static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State&, NormalOut& o) {
     o.alive = g.delta > 0;
     o.f_el = p.kn * g.delta;
     o.kn = p.kn;

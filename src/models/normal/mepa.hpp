@@ -58,7 +58,7 @@ inline double pow_nm1(double d, double n) {
   return std::pow(d, n - 1.0);
 }
 /// d^n for d >= 0.
-inline double powe(double d, double n) { return d > 0 ? d * pow_nm1(d, n) : 0.0; }
+COHDEM_INLINE double powe(double d, double n) { return d > 0 ? d * pow_nm1(d, n) : 0.0; }
 
 /// An InputError about `key` of a parameter set, naming where the key was given.
 inline InputError param_error(const ParamSet& ps, const std::string& key, const std::string& what) {
@@ -99,7 +99,7 @@ struct HystereticNormal : NormalBase {
 
   /// Stiffnesses of one contact (they depend on R* for hertz_k1 and Luding's phi_f).
   struct Stiff { double k1, k2, Dmax_p; };
-  static Stiff stiff(const Params& p, double rstar) {
+  COHDEM_INLINE static Stiff stiff(const Params& p, double rstar) {
     Stiff k;
     k.k1 = p.hertz_k1 ? (4.0 / 3.0) * p.Estar * std::sqrt(rstar) : p.k1;
     k.k2 = p.hertz_k1 ? k.k1 / (1.0 - p.ratio) : p.k2;
@@ -109,21 +109,21 @@ struct HystereticNormal : NormalBase {
   static double k1_of(const Params& p, double rstar) {
     return p.hertz_k1 ? (4.0 / 3.0) * p.Estar * std::sqrt(rstar) : p.k1;
   }
-  static double k2_at(const Stiff& k, double Dmax) {
+  COHDEM_INLINE static double k2_at(const Stiff& k, double Dmax) {
     if (k.Dmax_p <= 0 || Dmax >= k.Dmax_p) return k.k2;
     return k.k1 + (k.k2 - k.k1) * Dmax / k.Dmax_p;
   }
   /// Luding's shift: the Dmax whose f2 line passes through (D, -A), i.e.
   /// k2(Dm) D - (k2(Dm) - k1) Dm = -A. Constant k2: Dm = (k2 D + A)/(k2 - k1); in the
   /// growing range k2 = k1 + s Dm it is the positive root of s Dm^2 - s D Dm - (k1 D + A) = 0.
-  static double shifted_dmax(const Stiff& k, double D, double A) {
+  COHDEM_INLINE static double shifted_dmax(const Stiff& k, double D, double A) {
     const double dc = (k.k2 * D + A) / (k.k2 - k.k1);
     if (k.Dmax_p <= 0 || dc >= k.Dmax_p) return dc;
     const double s = (k.k2 - k.k1) / k.Dmax_p;
     return (s * D + std::sqrt(s * s * D * D + 4.0 * s * (k.k1 * D + A))) / (2.0 * s);
   }
 
-  static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
     const double d = g.delta;
     o.alive = d > 0;
     if (!o.alive) return;
@@ -154,7 +154,7 @@ struct HystereticNormal : NormalBase {
   }
 
   template <class P>
-  static double coulomb_base(const P& p, const NormalOut& o, double /*fn_total*/) {
+  COHDEM_INLINE static double coulomb_base(const P& p, const NormalOut& o, double /*fn_total*/) {
     return std::max(p.offset ? o.f_el + o.f_adh : o.f_el, 0.0);
   }
 
@@ -274,14 +274,14 @@ struct HystTangential : TangentialCommon {
             get_choice(p, specs[1])};
   }
   /// no.k_load = k1 delta^(n-1), from the normal law's evaluation of this contact.
-  static double stiffness(const Params& p, const PairGeom& g, const NormalOut& no) {
+  COHDEM_INLINE static double stiffness(const Params& p, const PairGeom& g, const NormalOut& no) {
     if (p.kt > 0) return p.kt;
     const double n = p.np.n;
     if (n == 1.0) return p.kt_ratio * no.k_load;  // k_load = k1
     if (p.form == 2) return p.kt_ratio * N::k1_of(p.np, g.rstar);
     return p.kt_ratio * no.k_load * (p.form == 0 ? n : 1.0);
   }
-  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc, State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc, State& s) {
     return update(s, g, stiffness(p, g, no), p.damp_t * gamma_n, p.mu, fc);
   }
 };

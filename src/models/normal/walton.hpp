@@ -65,7 +65,7 @@ struct WaltonNormal : NormalBase {
     return std::max(k2, kr);
   }
 
-  static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
+  COHDEM_INLINE static void apply(const Params& p, const PairGeom& g, State& s, NormalOut& o) {
     const double d = g.delta;
     if (s.amax <= 0 ? !(d > 0) : d <= -p.gap_c) { o.alive = false; return; }
     o.alive = true;
@@ -84,7 +84,7 @@ struct WaltonNormal : NormalBase {
     o.a = std::sqrt(2.0 * g.rstar * std::max(d, 0.0));
   }
   template <class P>
-  static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
 };
 
 }  // namespace cohdem

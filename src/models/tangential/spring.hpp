@@ -27,7 +27,7 @@ struct TangentialCommon {
   struct FixedState { Vec3 fs; };
   /// Shared history update; returns the tangential force on i.
   template <class S>
-  static Vec3 update(S& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {
+  COHDEM_INLINE static Vec3 update(S& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {
     // 1. rotate into the tangent plane, keep magnitude
     rotate_into_plane(s.fs, g.n);
     // 2. no energy from a stiffness drop
@@ -67,7 +67,7 @@ struct LinearTangential : TangentialCommon {
   static Params make(const ParamSet& p, const PairMaterial&) {
     return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2]), p.get(specs[3])};
   }
-  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
                     State& s) {
     const double kt = p.kt > 0 ? p.kt : p.kt_ratio * no.kn;
     return update(s, g, kt, p.damp_t * gamma_n, p.mu, fc);
@@ -85,7 +85,7 @@ struct MindlinTangential : TangentialCommon {
     const double damp_t = p.get(specs[1]);
     return {p.get(specs[0]), m.Gstar, damp_t, m.Estar > 0 ? damp_t * std::sqrt(4.0 * m.Gstar / m.Estar) : 0.0};
   }
-  static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
                     State& s) {
     const double kt = 8.0 * p.Gstar * no.a;
     // EDEM/LAMMPS form: gamma_t = gamma_n sqrt(kt/kn) (same damping ratio as the normal).
