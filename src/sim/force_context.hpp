@@ -17,7 +17,8 @@ struct PairResult {
   Vec3 f, tj;
 };
 
-/// The force loop's split of n particles over nt threads: thread t sweeps [a, b).
+/// The force loop's split of n particles over nt threads without a PairSlots (whose plan()
+/// splits by work): thread t sweeps [n t/nt, n (t+1)/nt).
 COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
 /// Particle q is "local" to the block [a, b) when every row that holds a pair of q lies in
 /// it (dep_lo/dep_hi from the list build): that block's thread alone scatters into q's
@@ -26,30 +27,64 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi
   return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
 }
 
-/// Where the force loop on several threads keeps the results it stores for the gather: only
-/// pairs whose j is not local to the sweeping thread's block (near a block boundary) are
-/// stored, each in its own slot of a compact buffer, so the buffer holds those pairs rather
-/// than the whole list (48 bytes per stored pair instead of per list entry). The map is
-/// rebuilt when the list or the thread count changes. Also holds, per thread, the particles
-/// left for after the kernel's barrier (with or without recording).
+/// How the force loop on several threads splits the particles, and where it keeps the results
+/// it stores for the gather. The blocks are contiguous ranges of particles of about equal
+/// work (plan()), not of equal count: the rows differ in length and contacts (a chute's base
+/// and dense bottom layers against its dilute top). Only pairs whose j is not local to the
+/// sweeping thread's block (near a block boundary) are stored, each in its own slot of a
+/// compact buffer, so the buffer holds those pairs rather than the whole list (48 bytes per
+/// stored pair instead of per list entry). Split and map are redone when the list or the
+/// thread count changes. Also holds, per thread, the particles left for after the kernel's
+/// barrier (with or without recording).
 struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
+  /// Work of a particle, in units of one screened list entry: the particle's own share
+  /// (finish, half-kicks, drift) and each contact evaluated. Rough costs on the chute (ns,
+  /// one thread): about 15 per particle, 4 per entry, 60 per contact.
+  static constexpr uint64_t kWorkParticle = 4, kWorkContact = 15;
+  std::vector<long> bound;   ///< thread t sweeps particles [bound[t], bound[t + 1])
   std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
   uint32_t count = 0;        ///< slots in use
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
   std::vector<std::vector<uint32_t>> deferred;
-  uint64_t builds = ~uint64_t(0);
-  long threads = 0, n = 0;
-  size_t np = 0;
-  /// Brings the map up to date for n particles on nt threads (blocks [n t/nt, n (t+1)/nt)).
+  uint64_t builds = ~uint64_t(0), plan_builds = ~uint64_t(0);
+  long threads = 0, n = 0, plan_threads = 0, plan_n = 0;
+  size_t np = 0, plan_np = 0;
+  /// Splits n particles into nt blocks of about equal work: kWorkParticle per particle, one
+  /// per list entry, kWorkContact per live contact (the contacts carried over at the last
+  /// build). Which thread sweeps which particle never changes what is summed or in which
+  /// order (force_kernel.hpp), so results do not depend on the split.
+  void plan(const NeighborList& nl, long n_, long nt) {
+    if (plan_builds == nl.stats.builds && plan_threads == nt && plan_n == n_ && plan_np == nl.pair_count() &&
+        bound.size() == size_t(nt + 1))
+      return;
+    plan_builds = nl.stats.builds; plan_threads = nt; plan_n = n_; plan_np = nl.pair_count();
+    auto work = [&](const long i) {
+      uint64_t w = kWorkParticle;
+      for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];
+      return w;
+    };
+    uint64_t total = 0;
+    for (long i = 0; i < n_; ++i) total += work(i);
+    bound.assign(size_t(nt + 1), n_);
+    bound[0] = 0;
+    uint64_t sum = 0;
+    long t = 1;
+    for (long i = 0; i < n_ && t < nt; ++i) {
+      while (t < nt && sum * uint64_t(nt) >= total * uint64_t(t)) bound[size_t(t++)] = i;
+      sum += work(i);
+    }
+  }
+  /// Brings the map up to date for n particles on nt threads, blocks from plan().
   void update(const NeighborList& nl, long n_, long nt) {
+    plan(nl, n_, nt);
     if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
     builds = nl.stats.builds; threads = nt; n = n_; np = nl.pair_count();
     of.assign(np, kNone);
     count = 0;
     for (long t = 0; t < nt; ++t) {
-      const long a = block_begin(n, t, nt), b = block_begin(n, t + 1, nt);
+      const long a = bound[size_t(t)], b = bound[size_t(t + 1)];
       for (long i = a; i < b; ++i)
         for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
           if (!local_to_block(nl.dep_lo.data(), nl.dep_hi.data(), nl.jdx[k], a, b)) of[k] = count++;

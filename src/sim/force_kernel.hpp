@@ -275,6 +275,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // slots are set up before the parallel region, for the team it will have (no barrier for
   // that inside); a team of another size sets them up again, inside.
   auto setup_slots = [&](const long nt) {
+    c.slots->plan(nl, n, nt);
     if (!keep_pair) {
       c.slots->update(nl, n, nt);
       if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
@@ -288,12 +289,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp parallel if (n > c.parallel_min)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
-    const long a = block_begin(n, tid, nt), b = block_begin(n, tid + 1, nt);
     const bool share = nt > 1 && c.slots != nullptr;
     if (share && nt != nt_plan) {
 #pragma omp single
-      setup_slots(nt);  // implicit barrier: every thread sees res, slot_of and the lists
+      setup_slots(nt);  // implicit barrier: every thread sees the blocks, res, slot_of and the lists
     }
+    // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
+    auto block = [&](const long t) { return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt); };
+    const long a = block(tid), b = block(tid + 1);
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.
@@ -343,7 +346,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       for (long t = 0; t < nt && base < g1; ++t) {
         const std::vector<uint32_t>& list = c.slots->deferred[size_t(t)];
         const size_t lo = std::max(g0, base), hi = std::min(g1, base + list.size());
-        const long ta = block_begin(n, t, nt), tb = block_begin(n, t + 1, nt);
+        const long ta = block(t), tb = block(t + 1);
         for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb);
         base += list.size();
       }

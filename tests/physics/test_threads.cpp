@@ -256,3 +256,37 @@ TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
   }
   omp_set_num_threads(1);
 }
+
+// The force loop's blocks (PairSlots::plan) hold about equal work, not equal counts: with
+// work w_i = kWorkParticle + entries + kWorkContact * live contacts of row i, each block's
+// work is within one particle's work of total/nt (the split is made between particles), the
+// blocks are contiguous and cover every particle once. In the settling box the rows differ
+// in length and contacts, so a split into equal counts fails this (checked).
+TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
+  auto s = make_box(1, false);
+  s->run(150);
+  const NeighborList& nl = s->nl;
+  const long n = long(s->particles.size());
+  std::vector<uint64_t> w(static_cast<size_t>(n));
+  uint64_t total = 0, wmax = 0;
+  for (long i = 0; i < n; ++i) {
+    w[size_t(i)] = PairSlots::kWorkParticle;
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w[size_t(i)] += 1 + PairSlots::kWorkContact * nl.hist.live[k];
+    total += w[size_t(i)];
+    wmax = std::max(wmax, w[size_t(i)]);
+  }
+  for (long nt : {2L, 3L, 4L}) {
+    PairSlots ps;
+    ps.plan(nl, n, nt);
+    ASSERT_EQ(ps.bound.size(), size_t(nt + 1));
+    EXPECT_EQ(ps.bound.front(), 0);
+    EXPECT_EQ(ps.bound.back(), n);
+    for (long t = 0; t < nt; ++t) {
+      EXPECT_LE(ps.bound[size_t(t)], ps.bound[size_t(t + 1)]);
+      uint64_t bw = 0;
+      for (long i = ps.bound[size_t(t)]; i < ps.bound[size_t(t + 1)]; ++i) bw += w[size_t(i)];
+      const double target = double(total) / double(nt);
+      EXPECT_LE(std::abs(double(bw) - target), double(wmax)) << nt << " threads, block " << t;
+    }
+  }
+}
