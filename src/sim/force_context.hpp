@@ -59,7 +59,10 @@ struct PairSlots {
     if (plan_builds == nl.stats.builds && plan_threads == nt && plan_n == n_ && plan_np == nl.pair_count() &&
         bound.size() == size_t(nt + 1))
       return;
-    plan_builds = nl.stats.builds; plan_threads = nt; plan_n = n_; plan_np = nl.pair_count();
+    plan_builds = nl.stats.builds;
+    plan_threads = nt;
+    plan_n = n_;
+    plan_np = nl.pair_count();
     auto work = [&](const long i) {
       uint64_t w = kWorkParticle;
       for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];

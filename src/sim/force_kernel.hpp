@@ -106,8 +106,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // work of one contact overlaps with the next (several rows hold one or no contact). A row
   // longer than a batch is split over several; each row's sums start at zero where its first
   // entry is, and are added to in list order.
-  auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke, const long a,
-                                   const long b) __attribute__((always_inline)) {
+  auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
+                                   const long a, const long b) __attribute__((always_inline)) {
     uint32_t hk[kBatch];  // plain arrays: no zero fill
     uint32_t hrow[kBatch];
     double hd[kBatch][4];

@@ -214,8 +214,8 @@ TEST(Threads, PairForcesAreRecordedOnRequest) {
 TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
   const double kn = 1e4, R = 15e-3, r = 1e-3, a = 1.9e-3;
   for (int threads : {1, 2, 3}) {
-    auto s = make_system({{"glass", 2500, 0, 0}}, "linear", "none", params({{"kn", kn}, {"e", 1.0}, {"mu", 0.5}}),
-                         1e-7, {0, 0, 0}, 2e-3);
+    auto s = make_system({{"glass", 2500, 0, 0}}, "linear", "none",
+                         params({{"kn", kn}, {"e", 1.0}, {"mu", 0.5}}), 1e-7, {0, 0, 0}, 2e-3);
     s->cfg.threads = threads;
     s->cfg.parallel_min = 0;
     s->add_particle(0, R, {0, 0, 0});
@@ -224,7 +224,8 @@ TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
         for (int iz = -10; iz <= 10; ++iz) {
           const Vec3 q{ix * a, iy * a, iz * a};
           const double gap = norm(q) - (R + r);
-          if ((gap >= -0.2e-3 && gap <= -0.05e-3) || (gap >= 0.05e-3 && norm(q) <= R + 4e-3)) s->add_particle(0, r, q);
+          if ((gap >= -0.2e-3 && gap <= -0.05e-3) || (gap >= 0.05e-3 && norm(q) <= R + 4e-3))
+            s->add_particle(0, r, q);
         }
     s->prepare();
     const ParticleStore& P = s->particles;
@@ -271,7 +272,8 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
   uint64_t total = 0, wmax = 0;
   for (long i = 0; i < n; ++i) {
     w[size_t(i)] = PairSlots::kWorkParticle;
-    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w[size_t(i)] += 1 + PairSlots::kWorkContact * nl.hist.live[k];
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
+      w[size_t(i)] += 1 + PairSlots::kWorkContact * nl.hist.live[k];
     total += w[size_t(i)];
     wmax = std::max(wmax, w[size_t(i)]);
   }

@@ -14,7 +14,9 @@ struct NormalBase {
   static double reach(const P&, double /*rstar*/) { return 0.0; }
   /// Normal force that bounds friction, rolling and twisting (Coulomb-type limits).
   template <class P>
-  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut&, double fn_total) { return std::max(fn_total, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut&, double fn_total) {
+    return std::max(fn_total, 0.0);
+  }
 };
 
 }  // namespace cohdem

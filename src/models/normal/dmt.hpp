@@ -30,7 +30,9 @@ struct DmtNormal : NormalBase {
     o.f_el = (2.0 / 3.0) * o.kn * g.delta - o.f_adh;
   }
   template <class P>
-  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) {
+    return std::max(o.f_el + o.f_adh, 0.0);
+  }
 };
 
 }  // namespace cohdem

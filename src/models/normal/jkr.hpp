@@ -79,7 +79,9 @@ struct JkrNormal : NormalBase {
     o.f_adh = pull_off(p, R);
   }
   template <class P>
-  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + 2.0 * o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) {
+    return std::max(o.f_el + 2.0 * o.f_adh, 0.0);
+  }
 };
 
 }  // namespace cohdem

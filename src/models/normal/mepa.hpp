@@ -281,7 +281,8 @@ struct HystTangential : TangentialCommon {
     if (p.form == 2) return p.kt_ratio * N::k1_of(p.np, g.rstar);
     return p.kt_ratio * no.k_load * (p.form == 0 ? n : 1.0);
   }
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc, State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n,
+                                  double fc, State& s) {
     return update(s, g, stiffness(p, g, no), p.damp_t * gamma_n, p.mu, fc);
   }
 };

@@ -84,7 +84,9 @@ struct WaltonNormal : NormalBase {
     o.a = std::sqrt(2.0 * g.rstar * std::max(d, 0.0));
   }
   template <class P>
-  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) { return std::max(o.f_el + o.f_adh, 0.0); }
+  COHDEM_INLINE static double coulomb_base(const P&, const NormalOut& o, double) {
+    return std::max(o.f_el + o.f_adh, 0.0);
+  }
 };
 
 }  // namespace cohdem

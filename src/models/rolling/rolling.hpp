@@ -25,7 +25,9 @@ struct NoRolling {
   struct State {};
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial&) { return {}; }
-  COHDEM_INLINE static Vec3 apply(const Params&, const PairGeom&, const NormalOut&, double, State&) { return {}; }
+  COHDEM_INLINE static Vec3 apply(const Params&, const PairGeom&, const NormalOut&, double, State&) {
+    return {};
+  }
 };
 
 struct EpsdRolling {
@@ -35,7 +37,8 @@ struct EpsdRolling {
       req("mu_r", "-", 0, kInf, "rolling friction coefficient"),
       opt("eta_r", "-", 0.0, 0, kInf, "rolling viscous damping ratio (Ai et al. 2011 Eq. 17)")};
   static Params make(const ParamSet& p, const PairMaterial&) { return {p.get(specs[0]), p.get(specs[1])}; }
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double fc, State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double fc,
+                                  State& s) {
     const Vec3 wr = rolling_rate(g);
     rotate_into_plane(s.mk, g.n);
     const double kr = 2.25 * no.kn * p.mu_r * p.mu_r * g.rstar * g.rstar;

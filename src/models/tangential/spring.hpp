@@ -67,8 +67,8 @@ struct LinearTangential : TangentialCommon {
   static Params make(const ParamSet& p, const PairMaterial&) {
     return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2]), p.get(specs[3])};
   }
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
-                    State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n,
+                                  double fc, State& s) {
     const double kt = p.kt > 0 ? p.kt : p.kt_ratio * no.kn;
     return update(s, g, kt, p.damp_t * gamma_n, p.mu, fc);
   }
@@ -85,8 +85,8 @@ struct MindlinTangential : TangentialCommon {
     const double damp_t = p.get(specs[1]);
     return {p.get(specs[0]), m.Gstar, damp_t, m.Estar > 0 ? damp_t * std::sqrt(4.0 * m.Gstar / m.Estar) : 0.0};
   }
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n, double fc,
-                    State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n,
+                                  double fc, State& s) {
     const double kt = 8.0 * p.Gstar * no.a;
     // EDEM/LAMMPS form: gamma_t = gamma_n sqrt(kt/kn) (same damping ratio as the normal).
     // With the Hertzian kn = 2 E* a, kt/kn = 4 G*/E* whatever the overlap: no square root

@@ -14,7 +14,9 @@ struct NoTwisting {
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial&) { return {}; }
   /// Returns the twisting moment on i about n (N m).
-  COHDEM_INLINE static double apply(const Params&, const PairGeom&, const NormalOut&, double, State&) { return 0.0; }
+  COHDEM_INLINE static double apply(const Params&, const PairGeom&, const NormalOut&, double, State&) {
+    return 0.0;
+  }
 };
 
 }  // namespace cohdem

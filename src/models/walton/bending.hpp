@@ -31,7 +31,8 @@ struct WaltonBending {
   }
   /// Returns the bending moment on i (N m). `fc` (Coulomb base) is not used: the limit is
   /// set by the pull-off force.
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double /*fc*/, State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double /*fc*/,
+                                  State& s) {
     const WaltonSpot sp = walton_spot(p.Y, p.sf, p.bf, p.c_theta, g.rstar, no.f_adh);
     rotate_into_plane(s.m, g.n);  // turn with the contact
     const Vec3 wb = g.wrel - g.n * dot(g.n, g.wrel);
@@ -52,7 +53,8 @@ struct WaltonTwisting {
     return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2]), p.get(specs[3]), p.get(specs[4])};
   }
   /// Returns the twisting moment on i about n (N m).
-  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double /*fc*/, State& s) {
+  COHDEM_INLINE static double apply(const Params& p, const PairGeom& g, const NormalOut& no, double /*fc*/,
+                                    State& s) {
     const WaltonSpot sp = walton_spot(p.Y, p.sf, p.bf, p.c_theta, g.rstar, no.f_adh);
     const double t_max = p.tf * sp.b_max;
     s.m -= dot(g.n, g.wrel) * sp.k_theta * g.dt;

@@ -20,7 +20,8 @@ struct WaltonTangential : TangentialCommon {
   static Params make(const ParamSet& p, const PairMaterial&) {
     return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2]), p.get(specs[3]), p.get(specs[4])};
   }
-  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double gamma_n, double fc, State& s) {
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double gamma_n,
+                                  double fc, State& s) {
     const double kf = p.kf_ratio * walton_kr(p.Y, p.sf, g.rstar);
     return update(s, g, kf, p.damp_t * gamma_n, p.mu, fc);
   }
