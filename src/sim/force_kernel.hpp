@@ -13,7 +13,8 @@
 //   half-kick, no row read after pass 2 of i using them.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
-// and pass 2 of each particle as soon as the rows it depends on are done; particles that
+// (of about equal work: PairSlots::plan) and pass 2 of each particle as soon as the rows it
+// depends on are done; particles that
 // depend on another block wait for the single barrier, after which they are shared out
 // evenly among the threads. The row sweep scatters j's share straight into j's reverse sums
 // (in ascending list order) when all of j's pairs lie in the sweeping thread's block
