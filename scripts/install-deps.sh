@@ -11,6 +11,7 @@ PKGS=(
   libgtest-dev libgmock-dev  # unit and physics tests
   libbenchmark-dev      # micro-benchmarks in bench/
   gnuplot-nox           # PNG plots of results
+  binutils              # objdump: the test that the contact laws are inlined into the force loops
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -275,7 +275,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // shared out (below), and without recording the gathered pairs are stored compactly. The
   // slots are set up before the parallel region, for the team it will have (no barrier for
   // that inside); a team of another size sets them up again, inside.
-  auto setup_slots = [&](const long nt) {
+  auto setup_slots = [&](const long nt) __attribute__((always_inline)) {
     c.slots->plan(nl, n, nt);
     if (!keep_pair) {
       c.slots->update(nl, n, nt);
@@ -296,7 +296,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       setup_slots(nt);  // implicit barrier: every thread sees the blocks, res, slot_of and the lists
     }
     // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
-    auto block = [&](const long t) { return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt); };
+    auto block = [&](const long t) __attribute__((always_inline)) {
+      return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
+    };
     const long a = block(tid), b = block(tid + 1);
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the

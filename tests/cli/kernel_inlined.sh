@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The force loops keep their contact law inline (docs/performance.md, eighth round): GCC's
+# inliner gives up inside the kernels' large OpenMP functions, and a restructured loop once
+# left ContactLaw::evaluate, then every sub-model, as calls (3-10 % of a chute's speed, and
+# nothing else showed it). This lists the calls in each `compute(...) [clone ._omp_fn.N]`
+# of the optimized binary and fails on any call into cohdem's own code other than the wall
+# geometry (rare entries), the thread split's set-up (PairSlots, once per list build) and
+# the cold exception paths. Libraries (libm's pow, cbrt, cos;
+# libgomp; operator new/delete) are allowed. Skipped, saying so, for a build that is not
+# optimized (Debug), where nothing is inlined.
+set -u
+bin=$1
+cache="$(dirname "$bin")/CMakeCache.txt"
+type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$cache" 2>/dev/null)
+case "$type" in
+  Release|RelWithDebInfo|MinSizeRel) ;;
+  *) echo "SKIP: build type '$type' is not optimized; the inlining check needs Release"; exit 0 ;;
+esac
+command -v objdump > /dev/null || { echo "FAIL objdump not found (package binutils, scripts/install-deps.sh)"; exit 1; }
+objdump -d --no-show-raw-insn -C "$bin" | awk '
+  /^[0-9a-f]+ <.*>:$/ {
+    fn = $0
+    k = index(fn, "::compute(cohdem::ForceContext&) const [clone ._omp_fn.") > 0
+    if (k) kernels++
+    next
+  }
+  k && /\tcall/ {
+    t = $0; sub(/.*call +[0-9a-f]* */, "", t)
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/) next
+    bad[t]++
+  }
+  END {
+    n = 0
+    for (t in bad) { print "FAIL call in a force loop: " t; n++ }
+    if (kernels < 10) { print "FAIL found only " kernels " force-loop functions to check"; n++ }
+    if (n == 0) print "ok   " kernels " force-loop functions, no call into cohdem code but wall geometry and set-up"
+    exit n > 0
+  }'
