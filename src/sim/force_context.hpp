@@ -48,42 +48,45 @@ struct PairSlots {
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
   std::vector<std::vector<uint32_t>> deferred;
-  uint64_t builds = ~uint64_t(0), plan_builds = ~uint64_t(0);
-  long threads = 0, n = 0, plan_threads = 0, plan_n = 0;
-  size_t np = 0, plan_np = 0;
-  /// Splits n particles into nt blocks of about equal work: kWorkParticle per particle, one
-  /// per list entry, kWorkContact per live contact (the contacts carried over at the last
-  /// build). Which thread sweeps which particle never changes what is summed or in which
-  /// order (force_kernel.hpp), so results do not depend on the split.
+  /// What the split and the map were made for: the list build, thread and particle counts.
+  uint64_t builds = ~uint64_t(0);
+  long threads = 0, n = 0;
+  size_t np = 0;
+  bool mapped = false;  ///< `of` and `count` belong to the current split
+  /// Work of particle i: kWorkParticle, one per list entry of its row, kWorkContact per live
+  /// contact (the contacts carried over at the last build).
+  static uint64_t work_of(const NeighborList& nl, long i) {
+    uint64_t w = kWorkParticle;
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];
+    return w;
+  }
+  /// Splits n particles into nt contiguous blocks of about equal work (work_of). Which thread
+  /// sweeps which particle never changes what is summed or in which order
+  /// (force_kernel.hpp), so results do not depend on the split. Redone when the list or
+  /// the counts change.
   void plan(const NeighborList& nl, long n_, long nt) {
-    if (plan_builds == nl.stats.builds && plan_threads == nt && plan_n == n_ && plan_np == nl.pair_count() &&
-        bound.size() == size_t(nt + 1))
-      return;
-    plan_builds = nl.stats.builds;
-    plan_threads = nt;
-    plan_n = n_;
-    plan_np = nl.pair_count();
-    auto work = [&](const long i) {
-      uint64_t w = kWorkParticle;
-      for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];
-      return w;
-    };
+    if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
+    builds = nl.stats.builds;
+    threads = nt;
+    n = n_;
+    np = nl.pair_count();
+    mapped = false;
     uint64_t total = 0;
-    for (long i = 0; i < n_; ++i) total += work(i);
-    bound.assign(size_t(nt + 1), n_);
+    for (long i = 0; i < n; ++i) total += work_of(nl, i);
+    bound.assign(size_t(nt + 1), n);
     bound[0] = 0;
     uint64_t sum = 0;
     long t = 1;
-    for (long i = 0; i < n_ && t < nt; ++i) {
+    for (long i = 0; i < n && t < nt; ++i) {
       while (t < nt && sum * uint64_t(nt) >= total * uint64_t(t)) bound[size_t(t++)] = i;
-      sum += work(i);
+      sum += work_of(nl, i);
     }
   }
-  /// Brings the map up to date for n particles on nt threads, blocks from plan().
+  /// plan(), then the slot map for its blocks.
   void update(const NeighborList& nl, long n_, long nt) {
     plan(nl, n_, nt);
-    if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
-    builds = nl.stats.builds; threads = nt; n = n_; np = nl.pair_count();
+    if (mapped) return;
+    mapped = true;
     of.assign(np, kNone);
     count = 0;
     for (long t = 0; t < nt; ++t) {

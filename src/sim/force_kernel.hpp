@@ -276,8 +276,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // slots are set up before the parallel region, for the team it will have (no barrier for
   // that inside); a team of another size sets them up again, inside.
   auto setup_slots = [&](const long nt) __attribute__((always_inline)) {
-    c.slots->plan(nl, n, nt);
-    if (!keep_pair) {
+    if (keep_pair) {
+      c.slots->plan(nl, n, nt);  // the blocks only: every result is stored by list entry
+    } else {
       c.slots->update(nl, n, nt);
       if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
       res = c.pair.data();

@@ -259,8 +259,8 @@ TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
 }
 
 // The force loop's blocks (PairSlots::plan) hold about equal work, not equal counts: with
-// work w_i = kWorkParticle + entries + kWorkContact * live contacts of row i, each block's
-// work is within one particle's work of total/nt (the split is made between particles), the
+// each particle's work (PairSlots::work_of: per particle, per list entry, per live contact),
+// each block's work is within one particle's work of total/nt (the split is made between particles), the
 // blocks are contiguous and cover every particle once. In the settling box the rows differ
 // in length and contacts, so a split into equal counts fails this (checked).
 TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
@@ -271,9 +271,7 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
   std::vector<uint64_t> w(static_cast<size_t>(n));
   uint64_t total = 0, wmax = 0;
   for (long i = 0; i < n; ++i) {
-    w[size_t(i)] = PairSlots::kWorkParticle;
-    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-      w[size_t(i)] += 1 + PairSlots::kWorkContact * nl.hist.live[k];
+    w[size_t(i)] = PairSlots::work_of(nl, i);
     total += w[size_t(i)];
     wmax = std::max(wmax, w[size_t(i)]);
   }
