@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -75,6 +76,7 @@ class In {
 }  // namespace
 
 void write_checkpoint(const std::filesystem::path& path, const System& s, const std::string& app_state) {
+  if (s.mid_step()) throw std::logic_error("write_checkpoint in the middle of a step (step_once(true))");
   Out o;
   for (char c : kMagic) o.pod(c);
   o.pod(kVersion);

@@ -357,31 +357,41 @@ int run_case(const Case& c, const RunOptions& opt) {
   uint64_t particle_steps = 0;
   const uint64_t first_step = s.step + 1;
   for (uint64_t k = first_step; k <= nsteps; ++k) {
-    s.step_once();
+    // What reads the state after this step is decided before it (the clock is read here,
+    // once per step): a step after which nothing is written lets the force loop apply the
+    // next step's opening half-kick and drift (System::step_once(true), bit-identical).
+    const auto now = clock::now();
+    const bool series_due = k % series_every == 0 || k == nsteps;
+    const bool frame_due = (frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0));
+    // Checkpoints at the end of a step (a restart continues bit for bit from any step).
+    const bool ck_due = c.output.checkpoint_interval > 0 &&
+                        std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval;
+    const bool stop_due =
+        opt.max_wall_time >= 0 && k < nsteps && std::chrono::duration<double>(now - t0).count() >= opt.max_wall_time;
+    const bool progress_due =
+        !opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval;
+    s.step_once(!(k == nsteps || series_due || frame_due || ck_due || stop_due || progress_due));
     particle_steps += s.particles.size();
-    if (k % series_every == 0 || k == nsteps) {
+    if (series_due) {
       check_finite(s);
       fill_row(c, s, S);
       csv.row(S.row);
     }
-    if ((frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0))) write_frame();
-    const auto now = clock::now();
-    // Checkpoints at the end of a step (a restart continues bit for bit from any step).
-    if (c.output.checkpoint_interval > 0 &&
-        std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval) {
+    if (frame_due) write_frame();
+    if (ck_due) {
       checkpoint();
       last_ck = now;
     }
-    if (opt.max_wall_time >= 0 && k < nsteps && std::chrono::duration<double>(now - t0).count() >= opt.max_wall_time) {
+    if (stop_due) {
       check_finite(s);
       checkpoint();
       spdlog::warn("wall-time limit of {} s reached: stopped at step {} of {} (t = {:.6g} s); continue with --resume {}",
                    opt.max_wall_time, k, nsteps, s.time, (out / "checkpoint.bin").string());
       return kExitResumable;
     }
-    if (!opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval) {
+    if (progress_due) {
       last = now;
-      const double el = std::chrono::duration<double>(now - t0).count();
+      const double el = std::chrono::duration<double>(clock::now() - t0).count();
       const double done = double(k - first_step + 1);
       spdlog::info("step {}/{} ({:.0f}%)  t = {:.5g} s  N = {}  contacts {}  KE {:.4g} J  {:.3g} particle-steps/s  ETA {}",
                    k, nsteps, 100.0 * k / nsteps, s.time, s.particles.size(), s.contact_count(), s.kinetic_energy(),

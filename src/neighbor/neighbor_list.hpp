@@ -114,6 +114,10 @@ class NeighborList {
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return x_ref_.size() == n; }
+  /// The positions and radii of the last build (has_reference(p.size())), for add_drift's
+  /// arithmetic in the force loop.
+  const Vec3* x_ref() const { return x_ref_.data(); }
+  const double* r_ref() const { return r_ref_.data(); }
   /// Adds particle i's displacement and radius growth since the build to d (a frozen
   /// particle only marks d.frozen). Needs has_reference(p.size()).
   COHDEM_INLINE void add_drift(Drift& d, const ParticleStore& p, size_t i) const {

@@ -123,6 +123,15 @@ struct ForceContext {
   /// T kick_h/I (the same operations as a separate pass after the kernel, one pass fewer).
   /// No pair read after that point uses the particle's velocities. 0: forces only.
   double kick_h = 0;
+  /// When > 0 (needs kick_h > 0, `drift` and a list built for these particles): the next
+  /// step's opening, fused. After its closing half-kick each free particle gets the next
+  /// step's opening half-kick (the same v += F kick_h/m, omega += T kick_h/I again) and
+  /// drift x += v open_dt, and its displacement since the list build goes into *drift
+  /// (frozen particles mark it): the operations of System::step_once's particle pass, in the
+  /// same order, so results are bit-identical to the unfused step. Particles attached to
+  /// walls are left to that pass. The state after the call is then mid-step.
+  double open_dt = 0;
+  Drift* drift = nullptr;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
   /// Store every live pair's result in `pair` (otherwise only those gathered across thread

@@ -58,9 +58,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t* const __restrict wstart = nl.wstart.data();
   const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
-  const Vec3* const __restrict x = P.x.data();
-  // Written only by the closing half-kick (ForceContext::kick_h), after every pair of the
+  // Velocities written only by the closing half-kick (ForceContext::kick_h), positions only
+  // by the fused opening of the next step (ForceContext::open_dt), after every pair of the
   // particle has been evaluated.
+  Vec3* const __restrict x = P.x.data();
   Vec3* const __restrict v = P.v.data();
   Vec3* const __restrict omega = P.omega.data();
   const double* const __restrict radius = P.radius.data();
@@ -85,6 +86,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
+  const double open_dt = c.open_dt;
+  const Vec3* const __restrict x_ref = nl.x_ref();
+  const double* const __restrict r_ref = nl.r_ref();
+  if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n))))
+    throw std::logic_error("force loop: the fused opening needs the closing half-kick, a drift and a built list");
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
@@ -198,7 +204,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     }
   };
   // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
-  auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b) __attribute__((always_inline)) {
+  auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b, Drift& drift)
+                    __attribute__((always_inline)) {
     // The pairs where i is j, summed on their own in ascending list order (the order of
     // rpair, and the order in which the row sweep scatters them), then added to i's own row
     // sum: the same operations whichever way they were collected.
@@ -260,9 +267,31 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     torque[i] = T;
     // Every row that holds a pair of i is done (that is when finish runs): i's velocities
     // are not read again in this call, and its force is final.
+    // The kicks and the drift work on registers and store each result once: a vector
+    // stored as three scalars and read back at once (v[i] after the closing kick, x[i] for
+    // the displacement) cannot be forwarded from the store buffer and stalls.
     if (kick_h > 0 && free_i) {
-      v[i] += F * (kick_h / mass[i]);
-      omega[i] += T * (kick_h / inertia[i]);
+      const double hm = kick_h / mass[i], hI = kick_h / inertia[i];
+      Vec3 vi = v[i] + F * hm, wi = omega[i] + T * hI;
+      // The next step's opening half-kick and drift (System::step_once's particle pass, the
+      // same operations in the same order), while i is in cache: nothing reads x[i] or v[i]
+      // again in this call. Particles attached to walls are carried by that pass.
+      if (open_dt > 0) {
+        vi += F * hm;
+        wi += T * hI;
+        // x[i] += vi open_dt component by component (a Vec3 temporary would be built on
+        // the stack and copied through a 16-byte load: the stall above).
+        Vec3& xr = x[i];
+        xr.x += vi.x * open_dt;
+        xr.y += vi.y * open_dt;
+        xr.z += vi.z * open_dt;
+        const Vec3& x0 = x_ref[i];
+        drift.add(Vec3{xr.x - x0.x, xr.y - x0.y, xr.z - x0.z}, radius[i] - r_ref[i]);  // NeighborList::add_drift
+      }
+      v[i] = vi;
+      omega[i] = wi;
+    } else if (open_dt > 0 && flag[i] == kFrozen) {
+      drift.frozen = true;
     }
   };
 
@@ -301,6 +330,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
     };
     const long a = block(tid), b = block(tid + 1);
+    Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
     // next: the first particle of the block not yet finished or skipped. A particle that
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.
@@ -318,7 +348,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         i = i1;
         k = ke;
         for (; next < i && long(dep_hi[next]) < i; ++next)
-          if (kAllLocal || long(dep_lo[next]) >= a) finish.template operator()<kAllLocal>(next, a, b);
+          if (kAllLocal || long(dep_lo[next]) >= a) finish.template operator()<kAllLocal>(next, a, b, drift);
       }
       return next;
     };
@@ -351,17 +381,21 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const std::vector<uint32_t>& list = c.slots->deferred[size_t(t)];
         const size_t lo = std::max(g0, base), hi = std::min(g1, base + list.size());
         const long ta = block(t), tb = block(t + 1);
-        for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb);
+        for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb, drift);
         base += list.size();
       }
     } else {
 #pragma omp barrier
       if (nt == 1)
         each_left.template operator()<true>(
-            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<true>(q, a, b); });
+            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<true>(q, a, b, drift); });
       else
         each_left.template operator()<false>(
-            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<false>(q, a, b); });
+            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<false>(q, a, b, drift); });
+    }
+    if (open_dt > 0) {
+#pragma omp critical(cohdem_fused_drift)
+      c.drift->merge(drift);  // max / min / or: the same in any order
     }
   }
 }

@@ -24,6 +24,7 @@ void compact_history(const HistoryArray& old, HistoryArray& nu, const std::vecto
 
 void System::remove_particles(const std::vector<uint8_t>& remove) {
   const size_t n = particles.size();
+  if (opened_) throw std::logic_error("remove_particles in the middle of a step (step_once(true))");
   if (remove.size() != n) throw std::invalid_argument("remove_particles: one flag per particle expected");
   std::vector<int64_t> nu(n, -1);
   int64_t m = 0;

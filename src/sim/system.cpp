@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "sim/force_context.hpp"
@@ -53,6 +54,7 @@ size_t System::insert(const InsertSpec& spec) {
 }
 
 void System::resume_prepare(const NeighborList::Reference* ref) {
+  opened_ = false;  // a restart starts at a step boundary
   prepare_reach();
   if (ref) nl.rebuild_at(particles, walls, cfg.domain, cfg.skin, reach_, *ref);
   else nl.build(particles, walls, cfg.domain, cfg.skin, reach_, false);
@@ -77,6 +79,7 @@ void System::prepare_reach() {
 }
 
 void System::prepare() {
+  if (opened_) throw std::logic_error("System::prepare in the middle of a step (step_once(true))");
   prepare_reach();
   const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
   nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
@@ -188,7 +191,7 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick_h) {
+void System::compute_forces(double kick_h, bool open_next) {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
   contacts_recorded_ = record;
@@ -202,6 +205,11 @@ void System::compute_forces(double kick_h) {
   ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
   ctx.kick_h = kick_h;
+  if (open_next) {
+    open_drift_ = Drift{};
+    ctx.open_dt = cfg.dt;
+    ctx.drift = &open_drift_;
+  }
   ctx.keep_pair = record;
   ctx.slots = &slots_;
   ctx.a_pair = record ? a_pair_.data() : nullptr;
@@ -244,8 +252,11 @@ void System::compute_forces(double kick_h) {
     }
 }
 
-void System::step_once() {
-  if (dirty_) prepare();
+void System::step_once(bool open_next) {
+  if (dirty_) {
+    if (opened_) throw std::logic_error("System: particles or walls changed in the middle of a step (step_once(true))");
+    prepare();
+  }
   const double dt = cfg.dt, h = 0.5 * dt;
   ParticleStore& P = particles;
   const long n = long(P.size());
@@ -255,13 +266,17 @@ void System::step_once() {
   // One pass over the particles: velocity Verlet's opening half-kick and the drift of free
   // particles, the rigid carrying of particles attached to walls (rotated about the wall's
   // old centre, then translated), and their displacement since the last list build, for the
-  // rebuild decision (the reduction is exact: the same on any number of threads).
+  // rebuild decision (the reduction is exact: the same on any number of threads). After
+  // step_once(true) the force loop has done the free (and frozen) particles' part already.
+  const bool opened = opened_;
+  opened_ = false;
   const bool tracked = nl.has_reference(size_t(n));
   const double t1 = time + dt;
-  Drift drift;
+  Drift drift = opened ? open_drift_ : Drift{};
 #pragma omp parallel for reduction(drift : drift) schedule(static) if (n > cfg.parallel_min)
   for (long i = 0; i < n; ++i) {
     const uint8_t f = P.flag[i];
+    if (opened && f != kAttached) continue;
     if (f == kFree) {
       P.v[i] += P.force[i] * (h / P.mass[i]);
       P.omega[i] += P.torque[i] * (h / P.inertia[i]);
@@ -293,8 +308,10 @@ void System::step_once() {
     dirty_ = false;
   }
   // The closing half-kick: applied by the force kernel to each particle as its force is
-  // complete (one pass fewer), unless a thermal model changes radii and inertia first.
-  compute_forces(thermal ? 0.0 : h);
+  // complete (one pass fewer), unless a thermal model changes radii and inertia first; so is
+  // the next step's opening when the caller allows it (not with a thermal model either).
+  const bool fuse = open_next && !thermal;
+  compute_forces(thermal ? 0.0 : h, fuse);
   if (thermal) {
     thermal->update(*this, true);  // heat flow, temperatures, radii (and inertia)
     const long n2 = long(P.size());
@@ -306,6 +323,7 @@ void System::step_once() {
     }
   }
   control_walls(dt);
+  opened_ = fuse;
 }
 
 void System::run(uint64_t nsteps, const std::function<void(const System&)>& after_step) {

@@ -95,7 +95,14 @@ class System {
   /// saved contacts without evaluating forces (the checkpoint carries them), so the run
   /// continues bit for bit.
   void resume_prepare(const NeighborList::Reference* ref = nullptr);
-  void step_once();
+  /// One time step (velocity Verlet). open_next: the caller promises that nothing reads or
+  /// changes the state before the next step_once, whose opening half-kick and drift the
+  /// force loop then applies to each free particle as its force is complete (one pass over
+  /// the particles fewer, bit-identical results). The state is then mid-step (mid_step()):
+  /// positions a step ahead, velocities half a step; only step_once may follow.
+  void step_once(bool open_next = false);
+  /// True between a step_once(true) and the next step_once.
+  bool mid_step() const { return opened_; }
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
 
   // Observables.
@@ -138,7 +145,7 @@ class System {
  private:
   /// Forces at the current state; kick_h > 0: each free particle's velocities also get the
   /// half-kick F h/m, T h/I once its force is complete (ForceContext::kick_h).
-  void compute_forces(double kick_h = 0);
+  void compute_forces(double kick_h = 0, bool open_next = false);
   /// Moves the walls' geometry by one step (translation, oscillation, servo/lid travel) and
   /// records each wall's translation in wall_dx_; step_once carries attached particles.
   void move_wall_geometry(double dt);
@@ -147,6 +154,8 @@ class System {
   Vec3 initial_velocity(const InsertSpec& spec);
   double reach_ = 0;
   bool dirty_ = true;
+  bool opened_ = false;  ///< the last force loop applied this step's opening (step_once(true))
+  Drift open_drift_;     ///< the displacements it made, for the rebuild decision
   SavedContacts pending_;
   bool has_pending_ = false;
   bool contacts_recorded_ = false;  ///< the last force pass stored pair forces and contact radii

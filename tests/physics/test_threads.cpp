@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include "fixture.hpp"
+#include "io/checkpoint.hpp"
 #include "sim/force_kernel.hpp"
 
 using namespace cohdem;
@@ -155,6 +156,76 @@ TEST(Threads, ClosingHalfKickInTheKernelEqualsASeparatePass) {
       EXPECT_EQ(moved, n);  // every particle was kicked (gravity at least)
     }
   }
+  omp_set_num_threads(1);
+}
+
+// A step may leave the next step's opening half-kick and drift to its force loop, applied
+// to each free particle as soon as its force is complete (System::step_once(true),
+// ForceContext::open_dt), instead of a pass of its own at the start of the next step. It is
+// the same arithmetic in the same order, so the states must agree bit for bit with plain
+// steps, on 1, 2 and 3 threads, with frozen particles (which only mark the displacement
+// set) and particles attached to a moving wall (which the next step's pass still carries)
+// and neighbor rebuilds decided from the displacements the loop reduced.
+TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
+  constexpr int kSteps = 400;
+  for (int threads : {1, 2, 3}) {
+    auto run_steps = [&](bool fuse) {
+      auto s = make_box(threads, false);
+      ParticleStore& P = s->particles;
+      for (size_t i = 0; i < 6; ++i) {  // frozen in place
+        P.flag[i] = kFrozen;
+        P.v[i] = P.omega[i] = Vec3{};
+      }
+      for (size_t i = 6; i < 10; ++i) {  // glued to the floor, which rises slowly
+        P.flag[i] = kAttached;
+        P.body[i] = 0;
+      }
+      s->walls[0].velocity = {0, 0, 0.02};
+      s->prepare();
+      size_t mid = 0;
+      for (int k = 0; k < kSteps; ++k) {
+        s->step_once(fuse && k + 1 < kSteps);
+        mid += s->mid_step();
+      }
+      EXPECT_EQ(mid, fuse ? size_t(kSteps - 1) : 0u);
+      EXPECT_FALSE(s->mid_step());
+      State st;
+      st.id = P.id;
+      st.x = P.x;
+      st.v = P.v;
+      st.w = P.omega;
+      st.wall_force = s->walls[0].force;
+      st.builds = s->nl.stats.builds;
+      return st;
+    };
+    const State a = run_steps(false), b = run_steps(true);
+    EXPECT_EQ(omp_get_max_threads(), threads);
+    EXPECT_GT(a.builds, 20u);  // rebuilds (and re-sorts) decided from the fused displacements
+    ASSERT_EQ(a.id, b.id);
+    size_t differ = 0;
+    for (size_t i = 0; i < a.x.size(); ++i) differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+    EXPECT_EQ(differ, 0u) << threads << " threads";
+    EXPECT_TRUE(a.wall_force == b.wall_force) << threads << " threads";
+    EXPECT_EQ(a.builds, b.builds) << threads << " threads";
+    if (threads == 2)
+      report("fused opening vs separate pass, 2 threads: particles with any differing bit", double(differ), 0.0, 0, "==");
+  }
+  omp_set_num_threads(1);
+}
+
+// Between step_once(true) and the next step the state is mid-step (positions a step ahead,
+// velocities half a step): what would read or change it must refuse, not save or use a
+// state that belongs to no time.
+TEST(Threads, MidStepStateRefusesCheckpointsAndEdits) {
+  auto s = make_box(1, false);
+  s->step_once(true);
+  ASSERT_TRUE(s->mid_step());
+  EXPECT_THROW(write_checkpoint(std::filesystem::temp_directory_path() / "cohdem_midstep.bin", *s), std::logic_error);
+  EXPECT_THROW(s->remove_particles(std::vector<uint8_t>(s->particles.size(), 0)), std::logic_error);
+  EXPECT_THROW(s->prepare(), std::logic_error);
+  s->step_once();
+  EXPECT_FALSE(s->mid_step());
+  EXPECT_NO_THROW(s->prepare());
   omp_set_num_threads(1);
 }
 
