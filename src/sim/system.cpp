@@ -278,9 +278,15 @@ void System::step_once(bool open_next) {
     const uint8_t f = P.flag[i];
     if (opened && f != kAttached) continue;
     if (f == kFree) {
-      P.v[i] += P.force[i] * (h / P.mass[i]);
+      // In registers, each result stored once: x[i] += v[i] dt right after storing v[i]
+      // reads it back through a 16-byte load the store buffer cannot forward (a stall).
+      const Vec3 v = P.v[i] + P.force[i] * (h / P.mass[i]);
+      P.v[i] = v;
       P.omega[i] += P.torque[i] * (h / P.inertia[i]);
-      P.x[i] += P.v[i] * dt;
+      Vec3& x = P.x[i];
+      x.x += v.x * dt;
+      x.y += v.y * dt;
+      x.z += v.z * dt;
     } else if (f == kAttached) {  // moves rigidly with wall body[i]
       const Wall& W = walls[size_t(P.body[i])];
       const double wn = norm(W.omega);

@@ -57,7 +57,7 @@ struct EpsdRolling {
       const double Ji = wi ? 0.0 : g.Ii + g.mi * g.ri * g.ri, Jj = wj ? 0.0 : g.Ij + g.mj * g.rj * g.rj;
       const double Ir = wj ? Ji : (wi ? Jj : Ji * Jj / (Ji + Jj));
       const Vec3 damped = s.mk - wr * (p.eta_r * 2.0 * std::sqrt(Ir * kr));
-      return slide ? s.mk : damped;
+      return select(slide, s.mk, damped);
     }
     return s.mk;
   }

@@ -45,7 +45,7 @@ struct TangentialCommon {
     // by exactly 1 (no branch: limit_scale).
     const bool slide = f2 > lim * lim;
     ft *= limit_scale(f2, lim);
-    s.fs = slide ? ft : s.fs;
+    s.fs = select(slide, ft, s.fs);
     return ft;
   }
 };
