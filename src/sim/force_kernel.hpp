@@ -10,7 +10,8 @@
 // Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
 //   order, adds that to i's own row sum, then i's wall contacts, then the body force; when
 //   asked (ForceContext::kick_h), it then gives i's velocities velocity Verlet's closing
-//   half-kick, no row read after pass 2 of i using them.
+//   half-kick, no row read after pass 2 of i using them, and, when asked too
+//   (ForceContext::open_dt), the next step's opening half-kick and drift.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
 // (of about equal work: PairSlots::plan) and pass 2 of each particle as soon as the rows it
