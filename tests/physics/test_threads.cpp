@@ -54,19 +54,25 @@ std::unique_ptr<System> make_box(int threads, bool record) {
   return s;
 }
 
-State run(int threads, bool record = false) {
-  auto s = make_box(threads, record);
+// The particles, the floor's force and the build count of a system after its run.
+State state_of(const System& s) {
   State st;
   st.threads = omp_get_max_threads();
-  size_t contacts = 0;
-  s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
-  const auto& P = s->particles;
+  const auto& P = s.particles;
   st.id = P.id;
   st.x = P.x;
   st.v = P.v;
   st.w = P.omega;
-  st.wall_force = s->walls[0].force;
-  st.builds = s->nl.stats.builds;
+  st.wall_force = s.walls[0].force;
+  st.builds = s.nl.stats.builds;
+  return st;
+}
+
+State run(int threads, bool record = false) {
+  auto s = make_box(threads, record);
+  size_t contacts = 0;
+  s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
+  State st = state_of(*s);
   st.contacts = contacts;
   return st;
 }
@@ -189,14 +195,7 @@ TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
       }
       EXPECT_EQ(mid, fuse ? size_t(kSteps - 1) : 0u);
       EXPECT_FALSE(s->mid_step());
-      State st;
-      st.id = P.id;
-      st.x = P.x;
-      st.v = P.v;
-      st.w = P.omega;
-      st.wall_force = s->walls[0].force;
-      st.builds = s->nl.stats.builds;
-      return st;
+      return state_of(*s);
     };
     const State a = run_steps(false), b = run_steps(true);
     EXPECT_EQ(omp_get_max_threads(), threads);
