@@ -114,17 +114,18 @@ class NeighborList {
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return x_ref_.size() == n; }
-  /// The positions and radii of the last build (has_reference(p.size())), for add_drift's
-  /// arithmetic in the force loop.
-  const Vec3* x_ref() const { return x_ref_.data(); }
-  const double* r_ref() const { return r_ref_.data(); }
   /// Adds particle i's displacement and radius growth since the build to d (a frozen
   /// particle only marks d.frozen). Needs has_reference(p.size()).
   COHDEM_INLINE void add_drift(Drift& d, const ParticleStore& p, size_t i) const {
     if (p.flag[i] == kFrozen)
       d.frozen = true;
     else
-      d.add(p.x[i] - x_ref_[i], p.radius[i] - r_ref_[i]);
+      add_moved(d, i, p.x[i], p.radius[i]);
+  }
+  /// The same for particle i, which can move, now at x with radius r (the force loop's fused
+  /// drift passes its fresh values).
+  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x, double r) const {
+    d.add(x - x_ref_[i], r - r_ref_[i]);
   }
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint

@@ -96,8 +96,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
   const double open_dt = c.open_dt;
-  const Vec3* const __restrict x_ref = nl.x_ref();
-  const double* const __restrict r_ref = nl.r_ref();
   if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n))))
     throw std::logic_error("force loop: the fused opening needs the closing half-kick, a drift and a built list");
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
@@ -297,8 +295,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         xr.x += vi.x * open_dt;
         xr.y += vi.y * open_dt;
         xr.z += vi.z * open_dt;
-        const Vec3& x0 = x_ref[i];
-        drift.add(Vec3{xr.x - x0.x, xr.y - x0.y, xr.z - x0.z}, radius[i] - r_ref[i]);  // NeighborList::add_drift
+        nl.add_moved(drift, size_t(i), xr, radius[i]);
       }
       v[i] = vi;
       omega[i] = wi;
