@@ -11,6 +11,20 @@
 
 namespace cohdem {
 
+/// Velocity Verlet's opening for a free particle: the half-kick v += F hm, w += T hI (hm =
+/// h/m, hI = h/I) and the drift x += v dt. Written once for System::step_once's particle
+/// pass and the force loop's fused opening (ForceContext::open_dt), which must stay
+/// bit-identical. v and w are the caller's registers; x is written component by component:
+/// a Vec3 temporary would be built on the stack and read back through a 16-byte load that
+/// the store buffer cannot forward (a stall).
+COHDEM_INLINE void open_free(Vec3& v, Vec3& w, Vec3& x, const Vec3& F, const Vec3& T, double hm, double hI, double dt) {
+  v += F * hm;
+  w += T * hI;
+  x.x += v.x * dt;
+  x.y += v.y * dt;
+  x.z += v.z * dt;
+}
+
 /// Result of one pair entry that j receives: the force on i (j takes its opposite) and the
 /// torque on j. One record, so the gather of pass 2 touches one cache line, not two.
 struct PairResult {

@@ -287,15 +287,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // same operations in the same order), while i is in cache: nothing reads x[i] or v[i]
       // again in this call. Particles attached to walls are carried by that pass.
       if (open_dt > 0) {
-        vi += F * hm;
-        wi += T * hI;
-        // x[i] += vi open_dt component by component (a Vec3 temporary would be built on
-        // the stack and copied through a 16-byte load: the stall above).
-        Vec3& xr = x[i];
-        xr.x += vi.x * open_dt;
-        xr.y += vi.y * open_dt;
-        xr.z += vi.z * open_dt;
-        nl.add_moved(drift, size_t(i), xr, radius[i]);
+        open_free(vi, wi, x[i], F, T, hm, hI, open_dt);
+        nl.add_moved(drift, size_t(i), x[i], radius[i]);
       }
       v[i] = vi;
       omega[i] = wi;

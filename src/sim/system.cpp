@@ -279,14 +279,11 @@ void System::step_once(bool open_next) {
     if (opened && f != kAttached) continue;
     if (f == kFree) {
       // In registers, each result stored once: x[i] += v[i] dt right after storing v[i]
-      // reads it back through a 16-byte load the store buffer cannot forward (a stall).
-      const Vec3 v = P.v[i] + P.force[i] * (h / P.mass[i]);
+      // would read it back through a 16-byte load the store buffer cannot forward (a stall).
+      Vec3 v = P.v[i], w = P.omega[i];
+      open_free(v, w, P.x[i], P.force[i], P.torque[i], h / P.mass[i], h / P.inertia[i], dt);
       P.v[i] = v;
-      P.omega[i] += P.torque[i] * (h / P.inertia[i]);
-      Vec3& x = P.x[i];
-      x.x += v.x * dt;
-      x.y += v.y * dt;
-      x.z += v.z * dt;
+      P.omega[i] = w;
     } else if (f == kAttached) {  // moves rigidly with wall body[i]
       const Wall& W = walls[size_t(P.body[i])];
       const double wn = norm(W.omega);
