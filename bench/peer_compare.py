@@ -76,6 +76,42 @@ class Problem:
         self.lammps, self.liggghts, self.physics_tol, self.note = lammps, liggghts, physics_tol, note
 
 
+def prepare_inputs(work, problems, chute_data, packing_n):
+    """Inputs in one working folder: peer inputs, the data files, the cohdem cases."""
+    for f in os.listdir(os.path.join(HERE, "peers")):
+        shutil.copy(os.path.join(HERE, "peers", f), work)
+    if any(p.startswith("chute") for p in problems):
+        if not os.path.exists(chute_data):
+            sys.exit(f"{chute_data} not found (--chute-data)")
+        shutil.copy(chute_data, os.path.join(work, "data.chute"))
+        for case in ("chute", "chute_hmr"):
+            subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "data.chute"),
+                            os.path.join(HERE, case + ".toml"), "-o", os.path.join(work, case + ".toml")], check=True)
+    if "packing" in problems:
+        subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(packing_n),
+                        os.path.join(work, "packing.data")], check=True, stdout=subprocess.DEVNULL)
+        subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "packing.data"),
+                        os.path.join(HERE, "packing.toml"), "-o", os.path.join(work, "packing.toml"), "--frozen", "",
+                        "--box", "xy"], check=True)
+
+
+def problem_table():
+    """The problems: cohdem case (in the working folder), flow-velocity axis, peer commands,
+    physics tolerance, note."""
+    return {
+        "chute": Problem("chute", "chute.toml", 0,
+                         ["lmp", "-in", "in.chute", "-log", "none"],
+                         ["liggghts", "-var", "model", "hooke", "-in", "in.chute.liggghts"], 0.02),
+        "chute_hmr": Problem("chute_hmr", "chute_hmr.toml", 0,
+                             ["lmp", "-var", "model", "hmr", "-in", "in.chute.granular", "-log", "none"],
+                             ["liggghts", "-var", "model", "hmr", "-in", "in.chute.liggghts"], 0.05,
+                             "rolling laws differ (cohdem EPSD, LAMMPS SDS, LIGGGHTS epsd2): physics roughly only"),
+        "packing": Problem("packing", "packing.toml", 2,
+                           ["lmp", "-in", "in.packing", "-log", "none"],
+                           ["liggghts", "-in", "in.packing.liggghts"], 0.02),
+    }
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=5, help="runs per code and problem (interleaved)")
@@ -107,36 +143,10 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     work = os.path.abspath(a.out)
 
-    # Inputs in one working folder: peer inputs, the data files, the cohdem cases.
-    for f in os.listdir(os.path.join(HERE, "peers")):
-        shutil.copy(os.path.join(HERE, "peers", f), work)
-    if any(p.startswith("chute") for p in problems):
-        if not os.path.exists(a.chute_data):
-            sys.exit(f"{a.chute_data} not found (--chute-data)")
-        shutil.copy(a.chute_data, os.path.join(work, "data.chute"))
-        for case in ("chute", "chute_hmr"):
-            subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "data.chute"),
-                            os.path.join(HERE, case + ".toml"), "-o", os.path.join(work, case + ".toml")], check=True)
-    if "packing" in problems:
-        subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(a.packing_n),
-                        os.path.join(work, "packing.data")], check=True, stdout=subprocess.DEVNULL)
-        subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "packing.data"),
-                        os.path.join(HERE, "packing.toml"), "-o", os.path.join(work, "packing.toml"), "--frozen", "",
-                        "--box", "xy"], check=True)
+    prepare_inputs(work, problems, a.chute_data, a.packing_n)
 
     mpi = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(a.mpi)] if a.mpi > 1 else []
-    probs = {
-        "chute": Problem("chute", "chute.toml", 0,
-                         ["lmp", "-in", "in.chute", "-log", "none"],
-                         ["liggghts", "-var", "model", "hooke", "-in", "in.chute.liggghts"], 0.02),
-        "chute_hmr": Problem("chute_hmr", "chute_hmr.toml", 0,
-                             ["lmp", "-var", "model", "hmr", "-in", "in.chute.granular", "-log", "none"],
-                             ["liggghts", "-var", "model", "hmr", "-in", "in.chute.liggghts"], 0.05,
-                             "rolling laws differ (cohdem EPSD, LAMMPS SDS, LIGGGHTS epsd2): physics roughly only"),
-        "packing": Problem("packing", "packing.toml", 2,
-                           ["lmp", "-in", "in.packing", "-log", "none"],
-                           ["liggghts", "-in", "in.packing.liggghts"], 0.02),
-    }
+    probs = problem_table()
     results = {}
     for pname in problems:
         P = probs[pname]

@@ -12,6 +12,7 @@ PKGS=(
   libbenchmark-dev      # micro-benchmarks in bench/
   gnuplot-nox           # PNG plots of results
   binutils              # objdump: the test that the contact laws are inlined into the force loops
+  valgrind              # callgrind: bench/instructions.py counts instructions per particle-step
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -2,8 +2,9 @@
 # The benchmark inputs stay valid as the code changes (issue 6: "keep the benchmark script
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
-# steps, and model_cost.py prints its four rows. LAMMPS's chute data comes from ../shared
-# beside the repository (as in CI). Speed itself is measured by the scripts, not here.
+# steps, model_cost.py prints its four rows and instructions.py counts a small packing.
+# LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
+# measured by the scripts, not here.
 set -u
 bin=$1; src=$2
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
@@ -43,5 +44,16 @@ import json, sys
 t = json.load(open('$work/mc/results.json'))
 ok = set(t) == {'linear', 'linear+epsd', 'hertz_mindlin+epsd', 'mepa+epsd'} and all(r['median'] > 0 and r['contacts_per_particle'] > 0 for r in t.values())
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   model_cost.py"; else echo "FAIL model_cost.py"; tail -5 "$work/mc.log"; fail=$((fail+1)); fi
+# instructions.py end to end (cohdem only, a 2000-sphere packing, runs of 2 and 5 steps under
+# callgrind): a positive count per particle-step, most of it in the force loop.
+if python3 "$src/bench/instructions.py" --problems packing --packing-n 2000 --codes cohdem --base 2 --steps 3 \
+     --cohdem "$bin" --out "$work/ins" > "$work/ins.log" 2>&1 &&
+   python3 -c "
+import json, math, sys
+r = json.load(open('$work/ins/instructions.json'))['results']['packing']['codes']['cohdem']
+n = r['instructions_per_particle_step']
+top = r['top_functions'][0]
+ok = math.isfinite(n) and n > 0 and 'ContactModelImpl' in top['function'] and top['per_particle_step'] > 0.5 * n
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   instructions.py"; else echo "FAIL instructions.py"; tail -5 "$work/ins.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
