@@ -115,8 +115,20 @@ struct ContactLaw {
     const Vec3 nxft = cross(g.n, ft);
     const Vec3 mtw = g.n * mt;
     out.f = g.n * fn + ft;
-    out.ti = nxft * (-li) + mr + mtw;
-    out.tj = nxft * (-lj) - mr - mtw;
+    // ti = -li n x ft + mr + mtw, tj = -lj n x ft - mr - mtw, summed in that order. A
+    // sub-model that never gives a moment (kNone) has its zero terms left out: adding +0 or
+    // -0 can change only the sign of a zero, which the sums the torques go into (started at
+    // +0) do not keep.
+    out.ti = nxft * (-li);
+    out.tj = nxft * (-lj);
+    if constexpr (!requires { R::kNone; }) {
+      out.ti += mr;
+      out.tj -= mr;
+    }
+    if constexpr (!requires { W::kNone; }) {
+      out.ti += mtw;
+      out.tj -= mtw;
+    }
     out.fn = fn;
     out.fn_el = no.f_el;
     out.ft = ft;

@@ -76,6 +76,9 @@ struct NeighborStats {
   uint64_t lost_contacts = 0;  ///< live contacts whose pair left the list (should stay 0)
 };
 
+/// Image code of a partner seen in place: shift[kNoShift] is (+0, +0, +0).
+inline constexpr uint8_t kNoShift = 13;
+
 class NeighborList {
  public:
   // Pair rows (CSR by i, i has the lower id).
@@ -94,7 +97,7 @@ class NeighborList {
   std::vector<uint16_t> wall;
   HistoryArray whist;
 
-  std::array<Vec3, 27> shift{};  ///< image translations
+  std::array<Vec3, 27> shift{};  ///< image translations, code (sx+1)*9 + (sy+1)*3 + (sz+1)
   NeighborStats stats;
   long parallel_min = 0;  ///< loops run on one thread below this many particles (SimConfig)
 

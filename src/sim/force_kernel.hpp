@@ -93,6 +93,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
   const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
+  double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
   const double open_dt = c.open_dt;
@@ -136,7 +137,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       const double ri = radius[i];
       for (uint32_t k = k0; k < k1; ++k) {
         const uint32_t j = jdx[k];
-        const Vec3 d = xi - (x[j] + shift[image[k]]);
+        // Most entries see j in place (kNoShift, a shift of +0): adding it could change only
+        // the sign of a zero coordinate, so skipping it changes no result and saves three
+        // loads and three additions per entry.
+        const uint8_t im = image[k];
+        Vec3 xj = x[j];
+        if (im != kNoShift) xj += shift[im];
+        const Vec3 d = xi - xj;
         const double rsum = ri + radius[j];
         const double d2 = norm2(d);
         hk[nh] = k;
@@ -209,7 +216,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         } else {
           res[slot_of ? slot_of[k] : k] = {out.f, out.tj};  // gathered by j's thread after the barrier
         }
-        if (c.a_pair) c.a_pair[k] = out.a;
+        if (a_pair) a_pair[k] = out.a;
       }
     }
   };

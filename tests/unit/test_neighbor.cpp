@@ -3,6 +3,7 @@
 // with and without periodic directions, and after re-sorting.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <set>
 
@@ -61,6 +62,11 @@ void check(bool periodic, bool resort) {
       EXPECT_NEAR(norm(p.x[i] - p.x[j] - nl.shift[nl.image[k]]), it->second, 1e-15);
     }
   EXPECT_EQ(seen.size(), ref.size()) << "pairs within the cutoff missing from the list";
+  // The force loop skips adding the in-place image's shift (kNoShift): it must be +0 exactly.
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(nl.shift[kNoShift][c], 0.0);
+    EXPECT_FALSE(std::signbit(nl.shift[kNoShift][c]));
+  }
   // Transposed index covers every pair once.
   EXPECT_EQ(nl.rpair.size(), nl.jdx.size());
 }

@@ -23,6 +23,7 @@ COHDEM_INLINE Vec3 rolling_rate(const PairGeom& g) { return g.wrel - g.n * dot(g
 struct NoRolling {
   struct Params {};
   struct State {};
+  static constexpr bool kNone = true;  // no moment: ContactLaw leaves its (zero) terms out
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial&) { return {}; }
   COHDEM_INLINE static Vec3 apply(const Params&, const PairGeom&, const NormalOut&, double, State&) {

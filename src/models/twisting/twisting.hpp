@@ -11,6 +11,7 @@ namespace cohdem {
 struct NoTwisting {
   struct Params {};
   struct State {};
+  static constexpr bool kNone = true;  // no moment: ContactLaw leaves its (zero) terms out
   static constexpr std::array<ParamSpec, 0> specs{};
   static Params make(const ParamSet&, const PairMaterial&) { return {}; }
   /// Returns the twisting moment on i about n (N m).
