@@ -95,10 +95,7 @@ def main():
     ap.add_argument("--base", type=int, default=20, help="steps of the shorter run")
     ap.add_argument("--packing-n", type=int, default=100000)
     ap.add_argument("--top", type=int, default=6, help="functions listed per code and problem")
-    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
-    ap.add_argument("--chute-data", default=None,
-                    help="LAMMPS chute data file (default: shared/peers/lammps-chute/data.chute beside the repo)")
-    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "instructions"))
+    pc.add_input_args(ap, os.path.join(REPO, "build", "bench", "instructions"))
     a = ap.parse_args()
     if a.steps < 1 or a.base < 1:
         sys.exit("--steps and --base must be >= 1")

@@ -76,6 +76,14 @@ class Problem:
         self.lammps, self.liggghts, self.physics_tol, self.note = lammps, liggghts, physics_tol, note
 
 
+def add_input_args(ap, out):
+    """The options of every peer script: the cohdem binary, the chute data, the output folder."""
+    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
+    ap.add_argument("--chute-data", default=None,
+                    help="LAMMPS chute data file (default: shared/peers/lammps-chute/data.chute beside the repo)")
+    ap.add_argument("--out", default=out)
+
+
 def prepare_inputs(work, problems, chute_data, packing_n):
     """Inputs in one working folder: peer inputs, the data files, the cohdem cases."""
     for f in os.listdir(os.path.join(HERE, "peers")):
@@ -122,10 +130,7 @@ def main():
     ap.add_argument("--peers", default="lammps,liggghts")
     ap.add_argument("--threads", type=int, default=1, help="cohdem OpenMP threads")
     ap.add_argument("--mpi", type=int, default=1, help="MPI ranks of the peers (mpirun -np)")
-    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
-    ap.add_argument("--chute-data", default=None,
-                    help="LAMMPS chute data file (default: shared/peers/lammps-chute/data.chute beside the repo)")
-    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "peers"))
+    add_input_args(ap, os.path.join(REPO, "build", "bench", "peers"))
     a = ap.parse_args()
 
     if a.chute_data is None:
