@@ -26,6 +26,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -54,6 +55,7 @@ COHDEM_INLINE void prefetch_record(const T* p) {
 /// Two doubles in one vector register (SSE2 on x86-64, NEON on AArch64), for the x and y
 /// components of a Vec3 in the screening.
 typedef double V2 __attribute__((vector_size(16)));
+static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "load_xy reads x and y as one 16-byte block");
 COHDEM_INLINE V2 load_xy(const Vec3& v) {
   V2 r;
   std::memcpy(&r, &v.x, sizeof r);
