@@ -78,11 +78,11 @@ def per_function(outfile):
     return total, funcs
 
 
-def run_counted(cmd, cwd, tag, work):
-    """Runs cmd under callgrind; returns (total, per-function counts, screen output)."""
+def run_counted(cmd, work, tag):
+    """Runs cmd under callgrind in folder work; returns (total, per-function counts, screen output)."""
     out = os.path.join(work, f"callgrind.{tag}.out")
     log = os.path.join(work, f"{tag}.log")
-    text = pc.sh(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}"] + cmd, cwd, log)
+    text = pc.sh(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}"] + cmd, work, log)
     total, funcs = per_function(out)
     return total, funcs, text
 
@@ -110,7 +110,7 @@ def main():
         if not shutil.which(tool):
             sys.exit(f"{tool} not found: run scripts/install-deps.sh (it installs valgrind)")
     for c in codes:
-        exe = {"cohdem": a.cohdem, "lammps": "lmp", "liggghts": "liggghts"}.get(c)
+        exe = a.cohdem if c == "cohdem" else pc.PEER_EXE.get(c)
         if exe is None:
             sys.exit(f"unknown code '{c}' (cohdem, lammps, liggghts)")
         if not (shutil.which(exe) or os.path.exists(exe)):
@@ -133,20 +133,13 @@ def main():
                 tag = f"{pname}.{c}.{n}"
                 if c == "cohdem":
                     out = os.path.join(work, f"{pname}.cohdem.out{n}")
-                    cmd = [os.path.abspath(a.cohdem), "run", P.cohdem_case, "--set", f"simulation.duration={n * 1e-4!r}",
-                           "--threads", "1", "--out", out, "--quiet"]
-                    total, funcs, _ = run_counted(cmd, work, tag, work)
-                    s = json.load(open(os.path.join(out, "summary.json")))
-                    if s["steps"] != n:
-                        raise RuntimeError(f"cohdem ran {s['steps']} steps, not {n}")
-                    atoms = s["particles"]
+                    total, funcs, _ = run_counted(P.command(c, n, os.path.abspath(a.cohdem), 1, out), work, tag)
+                    atoms = pc.cohdem_summary(out, n)["particles"]
                 else:
-                    cmd = (P.lammps if c == "lammps" else P.liggghts) + ["-var", "nsteps", str(n)]
-                    total, funcs, text = run_counted(cmd, work, tag, work)
-                    m = re.search(r"Loop time of \S+ on \d+ procs for (\d+) steps with (\d+) atoms", text)
-                    if not m or int(m.group(1)) != n:
-                        raise RuntimeError(f"{c}: no 'Loop time ... for {n} steps' line; see {tag}.log")
-                    atoms = int(m.group(2))
+                    total, funcs, text = run_counted(P.command(c, n), work, tag)
+                    _, steps, atoms = pc.peer_loop(text)
+                    if steps != n:
+                        raise RuntimeError(f"{c} ran {steps} steps, not {n}; see {tag}.log")
                 counted.append((total, funcs, atoms))
             (t0, f0, n0), (t1, f1, n1) = counted
             if n0 != n1:

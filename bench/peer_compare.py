@@ -45,12 +45,17 @@ def sh(cmd, cwd, log):
     return text
 
 
-def parse_peer(text, nsteps):
-    """LAMMPS/LIGGGHTS screen output -> (particle-steps/s, KE, KE_rot, v_mean)."""
+def peer_loop(text):
+    """LAMMPS/LIGGGHTS screen output -> (loop time s, steps, atoms) of its 'Loop time' line."""
     m = re.search(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
     if not m:
         raise RuntimeError("no 'Loop time' line in the output")
-    t, steps, atoms = float(m.group(1)), int(m.group(3)), int(m.group(4))
+    return float(m.group(1)), int(m.group(3)), int(m.group(4))
+
+
+def parse_peer(text, nsteps):
+    """LAMMPS/LIGGGHTS screen output -> (particle-steps/s, KE, KE_rot, v_mean)."""
+    t, steps, atoms = peer_loop(text)
     row = None
     for line in text.splitlines():
         f = line.split()
@@ -70,10 +75,30 @@ def find_chute_data():
     return os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute")
 
 
+PEER_EXE = {"lammps": "lmp", "liggghts": "liggghts"}
+DT = 1e-4  # the time step of every problem (its cohdem case and its peer inputs)
+
+
 class Problem:
     def __init__(self, name, cohdem_case, vel_axis, lammps, liggghts, physics_tol, note=""):
         self.name, self.cohdem_case, self.vel_axis = name, cohdem_case, vel_axis
         self.lammps, self.liggghts, self.physics_tol, self.note = lammps, liggghts, physics_tol, note
+
+    def command(self, code, nsteps, cohdem=None, threads=1, out=None):
+        """The command that runs this problem for nsteps in `code`, from the working folder
+        (cohdem: the binary, its thread count and output folder)."""
+        if code == "cohdem":
+            return [cohdem, "run", self.cohdem_case, "--set", f"simulation.duration={nsteps * DT!r}",
+                    "--threads", str(threads), "--out", out, "--quiet"]
+        return (self.lammps if code == "lammps" else self.liggghts) + ["-var", "nsteps", str(nsteps)]
+
+
+def cohdem_summary(out, nsteps):
+    """summary.json of a cohdem run in folder out, checked to have run nsteps steps."""
+    j = json.load(open(os.path.join(out, "summary.json")))
+    if j["steps"] != nsteps:
+        raise RuntimeError(f"cohdem ran {j['steps']} steps, not {nsteps}")
+    return j
 
 
 def add_input_args(ap, out):
@@ -138,7 +163,7 @@ def main():
     problems = [p for p in a.problems.split(",") if p]
     peers = [p for p in a.peers.split(",") if p]
     for p in peers:
-        exe = {"lammps": "lmp", "liggghts": "liggghts"}.get(p)
+        exe = PEER_EXE.get(p)
         if exe is None:
             sys.exit(f"unknown peer '{p}' (lammps, liggghts)")
         if not shutil.which(exe):
@@ -165,16 +190,12 @@ def main():
                 log = os.path.join(work, f"{pname}.{c}.{run}.log")
                 if c == "cohdem":
                     out = os.path.join(work, f"{pname}.cohdem.out")
-                    sh([a.cohdem, "run", P.cohdem_case, "--set", f"simulation.duration={nsteps * 1e-4!r}",
-                        "--threads", str(a.threads), "--out", out, "--quiet"], work, log)
-                    j = json.load(open(os.path.join(out, "summary.json")))
-                    if j["steps"] != nsteps:
-                        raise RuntimeError(f"cohdem ran {j['steps']} steps, not {nsteps}")
+                    sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log)
+                    j = cohdem_summary(out, nsteps)
                     r = (j["particle_steps_per_s"], j["translational_energy"], j["rotational_energy"],
                          j["mean_velocity"][P.vel_axis])
                 else:
-                    cmd = mpi + (P.lammps if c == "lammps" else P.liggghts) + ["-var", "nsteps", str(nsteps)]
-                    r = parse_peer(sh(cmd, work, log), nsteps)
+                    r = parse_peer(sh(mpi + P.command(c, nsteps), work, log), nsteps)
                 res[c]["rate"].append(r[0])
                 res[c]["ke"], res[c]["ke_rot"], res[c]["v"] = r[1], r[2], r[3]
                 print(f"  run {run + 1} {c:8s} {r[0]:10.4g} particle-steps/s", flush=True)

@@ -104,8 +104,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const double dt = c.dt, t = c.t;
   const Vec3 grav = c.gravity;
-  const bool want_a = c.a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
+  const bool want_a = a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
   const double open_dt = c.open_dt;
