@@ -95,6 +95,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     p.permute(cell_list_);
     bin();
   }
+  attached.clear();
+  for (size_t i = 0; i < n; ++i)
+    if (p.flag[i] == kAttached) attached.push_back(uint32_t(i));
 
   for (int sx = -1; sx <= 1; ++sx)
     for (int sy = -1; sy <= 1; ++sy)

@@ -97,6 +97,11 @@ class NeighborList {
   std::vector<uint16_t> wall;
   HistoryArray whist;
 
+  /// Particles attached to walls (kAttached) at the build, ascending: after a fused step
+  /// (System::step_once(true)) only they are left for the particle pass, which then skips
+  /// the others without reading their flags (and without a parallel region when none is).
+  std::vector<uint32_t> attached;
+
   std::array<Vec3, 27> shift{};  ///< image translations, code (sx+1)*9 + (sy+1)*3 + (sz+1)
   NeighborStats stats;
   long parallel_min = 0;  ///< loops run on one thread below this many particles (SimConfig)

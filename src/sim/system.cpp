@@ -273,29 +273,47 @@ void System::step_once(bool open_next) {
   const bool tracked = nl.has_reference(size_t(n));
   const double t1 = time + dt;
   Drift drift = opened ? open_drift_ : Drift{};
-#pragma omp parallel for reduction(drift : drift) schedule(static) if (n > cfg.parallel_min)
-  for (long i = 0; i < n; ++i) {
-    const uint8_t f = P.flag[i];
-    if (opened && f != kAttached) continue;
-    if (f == kFree) {
-      // In registers, each result stored once: x[i] += v[i] dt right after storing v[i]
-      // would read it back through a 16-byte load the store buffer cannot forward (a stall).
-      Vec3 v = P.v[i], w = P.omega[i];
-      open_free(v, w, P.x[i], P.force[i], P.torque[i], h / P.mass[i], h / P.inertia[i], dt);
-      P.v[i] = v;
-      P.omega[i] = w;
-    } else if (f == kAttached) {  // moves rigidly with wall body[i]
-      const Wall& W = walls[size_t(P.body[i])];
-      const double wn = norm(W.omega);
-      const Vec3 dx = wall_dx_[size_t(P.body[i])];  // the wall's translation this step
-      Vec3 x = P.x[i];
-      // W.center has already moved by dx: rotate about the old centre, then translate.
-      if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
-      P.x[i] = x + dx;
-      P.v[i] = W.velocity_at(P.x[i], t1);
-      P.omega[i] = W.omega;
+  // Rigid carrying of particle i, attached to wall body[i]: rotated about the wall's old
+  // centre, then translated.
+  auto carry = [&](const size_t i) {
+    const Wall& W = walls[size_t(P.body[i])];
+    const double wn = norm(W.omega);
+    const Vec3 dx = wall_dx_[size_t(P.body[i])];  // the wall's translation this step
+    Vec3 x = P.x[i];
+    // W.center has already moved by dx: rotate about the old centre, then translate.
+    if (wn > 0) x = (W.center - dx) + rotate(x - (W.center - dx), W.omega / wn, wn * dt);
+    P.x[i] = x + dx;
+    P.v[i] = W.velocity_at(P.x[i], t1);
+    P.omega[i] = W.omega;
+  };
+  if (opened) {
+    // Only the attached particles are left (the list's record of them: flags change only
+    // with a prepare(), which rebuilds it); none, no parallel region either.
+    const std::vector<uint32_t>& att = nl.attached;
+    const long na = long(att.size());
+    if (na > 0) {
+#pragma omp parallel for reduction(drift : drift) schedule(static) if (na > cfg.parallel_min)
+      for (long q = 0; q < na; ++q) {
+        carry(att[size_t(q)]);
+        if (tracked) nl.add_drift(drift, P, att[size_t(q)]);
+      }
     }
-    if (tracked) nl.add_drift(drift, P, size_t(i));  // frozen particles only mark the set
+  } else {
+#pragma omp parallel for reduction(drift : drift) schedule(static) if (n > cfg.parallel_min)
+    for (long i = 0; i < n; ++i) {
+      const uint8_t f = P.flag[i];
+      if (f == kFree) {
+        // In registers, each result stored once: x[i] += v[i] dt right after storing v[i]
+        // would read it back through a 16-byte load the store buffer cannot forward (a stall).
+        Vec3 v = P.v[i], w = P.omega[i];
+        open_free(v, w, P.x[i], P.force[i], P.torque[i], h / P.mass[i], h / P.inertia[i], dt);
+        P.v[i] = v;
+        P.omega[i] = w;
+      } else if (f == kAttached) {
+        carry(size_t(i));
+      }
+      if (tracked) nl.add_drift(drift, P, size_t(i));  // frozen particles only mark the set
+    }
   }
   time = t1;
   ++step;
