@@ -53,6 +53,9 @@ class ContactModelImpl final : public ContactModel {
   int n() const { return n_; }
 
  private:
+  /// The wall contacts of particle i, added to F and T in wall-entry order (the force loop's
+  /// pass 2; out of line, sim/force_kernel.hpp).
+  __attribute__((noinline)) void wall_contacts(ForceContext& c, long i, Vec3& F, Vec3& T) const;
   std::string name_;
   int n_ = 0;
   std::vector<Params> params_;

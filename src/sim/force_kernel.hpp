@@ -68,16 +68,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   NeighborList& nl = c.nl;
   const long n = long(P.size());
   State* const __restrict hs = reinterpret_cast<State*>(nl.hist.data.data());
-  State* const __restrict ws = reinterpret_cast<State*>(nl.whist.data.data());
   uint8_t* const __restrict live = nl.hist.live.data();
-  uint8_t* const __restrict wlive = nl.whist.live.data();
   const uint32_t* const __restrict start = nl.start.data();
   const uint32_t* const __restrict jdx = nl.jdx.data();
   const uint8_t* const __restrict image = nl.image.data();
   const uint32_t* const __restrict rstart = nl.rstart.data();
   const uint32_t* const __restrict rpair = nl.rpair.data();
   const uint32_t* const __restrict wstart = nl.wstart.data();
-  const uint16_t* const __restrict wall_of = nl.wall.data();
   const Vec3* const __restrict shift = nl.shift.data();
   // Velocities written only by the closing half-kick (ForceContext::kick_h), positions only
   // by the fused opening of the next step (ForceContext::open_dt), after every pair of the
@@ -97,15 +94,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   PairResult* res = c.pair.data();
   const uint32_t* slot_of = nullptr;
   PairResult* const __restrict rev = c.rev.data();  // reverse sums of local particles
-  Vec3* const __restrict f_wall = c.f_wall.data();
-  Vec3* const __restrict tw_wall = c.tw_wall.data();
-  Vec3* const __restrict c_wall = c.c_wall.data();
-  const Wall* const walls = c.walls.data();
   constexpr double inf = std::numeric_limits<double>::infinity();
-  const double dt = c.dt, t = c.t;
+  const double dt = c.dt;
   const Vec3 grav = c.gravity;
+  // The material pairs' parameters, read through locals: through `this` they were reloaded
+  // after every contact's stores.
+  const Params* const __restrict params = params_.data();
+  const size_t nmat = size_t(n_);
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
-  const bool want_a = a_pair != nullptr, want_a_wall = c.a_wall != nullptr;
+  const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
   const double open_dt = c.open_dt;
@@ -122,206 +119,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // every particle is local (kAllLocal skips the test).
   const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
   const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
-  auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
-    return local_to_block(dep_lo, dep_hi, q, a, b);
-  };
-
-  // Pass 1 of the list entries [kb, ke) (at most kBatch), which belong to the rows [i0, i1]
-  // in block [a, b): the entries that touch or are live are picked first, without branches
-  // (most entries are not in contact: the skin), so the loads of all entries overlap and no
-  // branch mispredicts; then they are evaluated in one loop that runs across rows, so the
-  // work of one contact overlaps with the next (several rows hold one or no contact). A row
-  // longer than a batch is split over several; each row's sums start at zero where its first
-  // entry is, and are added to in list order.
-  auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
-                                   const long a, const long b) __attribute__((always_inline)) {
-    uint32_t hk[kBatch];  // plain arrays: no zero fill
-    uint32_t hrow[kBatch];
-    double hd[kBatch][4];
-    uint32_t nh = 0;
-    for (long i = i0; i <= i1 && i < b; ++i) {
-      const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
-      if (start[i] >= kb) {
-        force[i] = Vec3{};
-        torque[i] = Vec3{};
-      }
-      const V2 xi_xy = load_xy(x[i]);
-      const double xi_z = x[i].z;
-      const double ri = radius[i];
-      for (uint32_t k = k0; k < k1; ++k) {
-        const uint32_t j = jdx[k];
-        // Most entries see j in place (kNoShift, a shift of +0): adding it could change only
-        // the sign of a zero coordinate, so skipping it changes no result and saves three
-        // loads and three additions per entry.
-        const uint8_t im = image[k];
-        V2 xj_xy = load_xy(x[j]);
-        double xj_z = x[j].z;
-        if (im != kNoShift) {
-          xj_xy += load_xy(shift[im]);
-          xj_z += shift[im].z;
-        }
-        // x and y in one register: the same operations, in the same order, as on a Vec3.
-        const V2 d_xy = xi_xy - xj_xy;
-        const double dz = xi_z - xj_z;
-        const V2 sq = d_xy * d_xy;
-        const double rsum = ri + radius[j];
-        const double d2 = (sq[0] + sq[1]) + dz * dz;
-        hk[nh] = k;
-        hrow[nh] = uint32_t(i);
-        std::memcpy(&hd[nh][0], &d_xy, sizeof d_xy);
-        hd[nh][2] = dz;
-        hd[nh][3] = d2;
-        nh += uint32_t((d2 < rsum * rsum) | (live[k] != 0));
-      }
-    }
-    // The touching entries' history and partners' reverse sums, velocities and spins are
-    // far apart in memory (j runs over the neighbouring cells; touching entries are one in
-    // five or seven, too sparse for the hardware prefetcher): they are asked for D contacts
-    // ahead, so their misses overlap with the evaluation (asking for the whole batch at once
-    // was 2-6 % slower: more requests in flight than the core keeps).
-    // Each record is asked for by its first and its last byte: records of 24 to 80 bytes
-    // packed end to end straddle two cache lines at a quarter to over half of their
-    // positions, and the second line would still miss (the same line twice costs nothing).
-    auto pf = [&](const uint32_t h) __attribute__((always_inline)) {
-      const uint32_t k = hk[h], j = jdx[k];
-      prefetch_record<1>(hs + k);
-      if (keep_pair) prefetch_record<1>(res + k);
-      prefetch_record<1>(rev + j);
-      prefetch_record<0>(v + j);
-      prefetch_record<0>(omega + j);
-    };
-    constexpr uint32_t D = 8;
-    for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
-    // Written in full by every evaluation that returns true (read only then): declared once,
-    // so its 152-byte zero fill (a `rep stos`) is not repeated per contact.
-    PairForce out;
-    for (uint32_t h = 0; h < nh; ++h) {
-      if (h + D < nh) pf(h + D);
-      const uint32_t k = hk[h], j = jdx[k], i = hrow[h];
-      const double ri = radius[i], rj = radius[j];
-      const double rsum = ri + rj;
-      const double dist = std::sqrt(hd[h][3]);
-      PairGeom g;
-      g.n = Vec3{hd[h][0], hd[h][1], hd[h][2]} * (1.0 / dist);  // one division, not three
-      g.delta = rsum - dist;
-      g.ri = ri;
-      g.rj = rj;
-      g.rstar = ri * rj / rsum;
-      const bool fi = flag[i] == kFree, fj = flag[j] == kFree;
-      g.mi = fi ? mass[i] : inf;
-      g.mj = fj ? mass[j] : inf;
-      g.Ii = fi ? inertia[i] : inf;
-      g.Ij = fj ? inertia[j] : inf;
-      // m* = mi mj / (mi + mj), one division; a frozen partner counts as infinitely heavy
-      // (two frozen particles: m* = inf).
-      g.mstar = fi && fj ? g.mi * g.mj / (g.mi + g.mj) : (fi ? g.mi : g.mj);
-      const Vec3 vij = v[i] - v[j];
-      g.vn = dot(vij, g.n);
-      const double li = ri - 0.5 * g.delta, lj = rj - 0.5 * g.delta;
-      const Vec3 vrel = vij - cross(omega[i] * li + omega[j] * lj, g.n);
-      g.vt = vrel - g.n * dot(vrel, g.n);
-      g.wrel = omega[i] - omega[j];
-      g.dt = dt;
-      g.want_a = want_a;
-      const bool alive = Law::evaluate(p(species[i], species[j]), g, hs[k], out);
-      live[k] = alive;
-      if (alive) {
-        force[i] += out.f;
-        torque[i] += out.ti;
-        if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
-          rev[j].f -= out.f;
-          rev[j].tj += out.tj;
-          if (keep_pair) res[k] = {out.f, out.tj};
-        } else {
-          res[slot_of ? slot_of[k] : k] = {out.f, out.tj};  // gathered by j's thread after the barrier
-        }
-        if (a_pair) a_pair[k] = out.a;
-      }
-    }
-  };
-  // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
-  auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b, Drift& drift)
-                    __attribute__((always_inline)) {
-    // The pairs where i is j, summed on their own in ascending list order (the order of
-    // rpair, and the order in which the row sweep scatters them), then added to i's own row
-    // sum: the same operations whichever way they were collected.
-    Vec3 R, RT;
-    if (kAllLocal || local(uint32_t(i), a, b)) {
-      R = rev[i].f;
-      RT = rev[i].tj;
-      rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
-    } else {
-      for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
-        const uint32_t k = rpair[q];
-        if (live[k]) {
-          const PairResult& r = res[slot_of ? slot_of[k] : k];
-          R -= r.f;
-          RT += r.tj;
-        }
-      }
-    }
-    Vec3 F = force[i] + R, T = torque[i] + RT;
-    for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
-      const Wall& w = walls[wall_of[e]];
-      PairGeom g;
-      double delta;
-      if (!w.contact(x[i], radius[i], g.n, delta) || (!wlive[e] && delta <= 0)) {
-        if (wlive[e]) { ws[e] = State{}; wlive[e] = 0; }
-        continue;
-      }
-      g.delta = delta;
-      g.ri = radius[i];
-      g.rj = 0;
-      g.rstar = g.ri;
-      g.mi = g.mstar = mass[i];
-      g.mj = g.Ij = inf;
-      g.Ii = inertia[i];
-      const double li = g.ri - delta;
-      const Vec3 cp = x[i] - g.n * li;
-      const Vec3 vw = w.velocity_at(cp, t);
-      g.vn = dot(v[i] - vw, g.n);
-      const Vec3 vrel = v[i] - vw - cross(omega[i] * li, g.n);
-      g.vt = vrel - g.n * dot(vrel, g.n);
-      g.wrel = omega[i] - w.omega;
-      g.dt = dt;
-      g.want_a = want_a_wall;
-      PairForce out;
-      const bool alive = Law::evaluate(p(species[i], w.material), g, ws[e], out);
-      wlive[e] = alive;
-      if (alive) {
-        F += out.f;
-        T += out.ti;
-        f_wall[e] = out.f;
-        tw_wall[e] = out.tj;
-        c_wall[e] = cp;
-        if (c.a_wall) c.a_wall[e] = out.a;
-      }
-    }
-    const bool free_i = flag[i] == kFree;
-    if (free_i) F += grav * mass[i];
-    force[i] = F;
-    torque[i] = T;
-    // Every row that holds a pair of i is done (that is when finish runs): i's velocities
-    // are not read again in this call, and its force is final.
-    // The kicks and the drift work on registers and store each result once: a vector
-    // stored as three scalars and read back at once (v[i] after the closing kick, x[i] for
-    // the displacement) cannot be forwarded from the store buffer and stalls.
-    if (kick_h > 0 && free_i) {
-      const double hm = kick_h / mass[i], hI = kick_h / inertia[i];
-      Vec3 vi = v[i] + F * hm, wi = omega[i] + T * hI;
-      // The next step's opening half-kick and drift (System::step_once's particle pass, the
-      // same operations in the same order), while i is in cache: nothing reads x[i] or v[i]
-      // again in this call. Particles attached to walls are carried by that pass.
-      if (open_dt > 0) {
-        open_free(vi, wi, x[i], F, T, hm, hI, open_dt);
-        nl.add_moved(drift, size_t(i), x[i], radius[i]);
-      }
-      v[i] = vi;
-      omega[i] = wi;
-    } else if (open_dt > 0 && flag[i] == kFrozen) {
-      drift.frozen = true;
-    }
-  };
 
   // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2
   // of particle p follows as soon as every row it depends on is done (dep_hi[p] <= current
@@ -345,7 +142,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   };
   const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
   if (nt_plan > 1 && c.slots != nullptr) setup_slots(nt_plan);
-#pragma omp parallel if (n > c.parallel_min)
+  // The arrays' pointers and the loop's constants are firstprivate, and the lambdas below are
+  // defined inside the region: shared, each use went through the region's record of the
+  // variable's address (two dependent loads, repeated after every store that might alias it);
+  // private copies stay in registers or one stack slot (the linear chute: 599 -> 557
+  // instructions per particle-step, bit-identical). res and slot_of stay shared: a team of
+  // another size sets them inside the region.
+#pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
+                                                  inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
+                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
@@ -353,6 +158,179 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp single
       setup_slots(nt);  // implicit barrier: every thread sees the blocks, res, slot_of and the lists
     }
+    auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
+      return local_to_block(dep_lo, dep_hi, q, a, b);
+    };
+
+    // Pass 1 of the list entries [kb, ke) (at most kBatch), which belong to the rows [i0, i1]
+    // in block [a, b): the entries that touch or are live are picked first, without branches
+    // (most entries are not in contact: the skin), so the loads of all entries overlap and no
+    // branch mispredicts; then they are evaluated in one loop that runs across rows, so the
+    // work of one contact overlaps with the next (several rows hold one or no contact). A row
+    // longer than a batch is split over several; each row's sums start at zero where its first
+    // entry is, and are added to in list order.
+    auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
+                                     const long a, const long b) __attribute__((always_inline)) {
+      uint32_t hk[kBatch];  // plain arrays: no zero fill
+      uint32_t hrow[kBatch];
+      double hd[kBatch][4];
+      uint32_t nh = 0;
+      for (long i = i0; i <= i1 && i < b; ++i) {
+        const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
+        if (start[i] >= kb) {
+          force[i] = Vec3{};
+          torque[i] = Vec3{};
+        }
+        const V2 xi_xy = load_xy(x[i]);
+        const double xi_z = x[i].z;
+        const double ri = radius[i];
+        for (uint32_t k = k0; k < k1; ++k) {
+          const uint32_t j = jdx[k];
+          // Most entries see j in place (kNoShift, a shift of +0): adding it could change only
+          // the sign of a zero coordinate, so skipping it changes no result and saves three
+          // loads and three additions per entry.
+          const uint8_t im = image[k];
+          V2 xj_xy = load_xy(x[j]);
+          double xj_z = x[j].z;
+          if (im != kNoShift) {
+            xj_xy += load_xy(shift[im]);
+            xj_z += shift[im].z;
+          }
+          // x and y in one register: the same operations, in the same order, as on a Vec3.
+          const V2 d_xy = xi_xy - xj_xy;
+          const double dz = xi_z - xj_z;
+          const V2 sq = d_xy * d_xy;
+          const double rsum = ri + radius[j];
+          const double d2 = (sq[0] + sq[1]) + dz * dz;
+          hk[nh] = k;
+          hrow[nh] = uint32_t(i);
+          std::memcpy(&hd[nh][0], &d_xy, sizeof d_xy);
+          hd[nh][2] = dz;
+          hd[nh][3] = d2;
+          nh += uint32_t((d2 < rsum * rsum) | (live[k] != 0));
+        }
+      }
+      // The touching entries' history and partners' reverse sums, velocities and spins are
+      // far apart in memory (j runs over the neighbouring cells; touching entries are one in
+      // five or seven, too sparse for the hardware prefetcher): they are asked for D contacts
+      // ahead, so their misses overlap with the evaluation (asking for the whole batch at once
+      // was 2-6 % slower: more requests in flight than the core keeps).
+      // Each record is asked for by its first and its last byte: records of 24 to 80 bytes
+      // packed end to end straddle two cache lines at a quarter to over half of their
+      // positions, and the second line would still miss (the same line twice costs nothing).
+      auto pf = [&](const uint32_t h) __attribute__((always_inline)) {
+        const uint32_t k = hk[h], j = jdx[k];
+        prefetch_record<1>(hs + k);
+        if (keep_pair) prefetch_record<1>(res + k);
+        prefetch_record<1>(rev + j);
+        prefetch_record<0>(v + j);
+        prefetch_record<0>(omega + j);
+      };
+      constexpr uint32_t D = 8;
+      for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
+      // Written in full by every evaluation that returns true (read only then): declared once,
+      // so its 152-byte zero fill (a `rep stos`) is not repeated per contact.
+      PairForce out;
+      for (uint32_t h = 0; h < nh; ++h) {
+        if (h + D < nh) pf(h + D);
+        const uint32_t k = hk[h], j = jdx[k], i = hrow[h];
+        const double ri = radius[i], rj = radius[j];
+        const double rsum = ri + rj;
+        const double dist = std::sqrt(hd[h][3]);
+        PairGeom g;
+        g.n = Vec3{hd[h][0], hd[h][1], hd[h][2]} * (1.0 / dist);  // one division, not three
+        g.delta = rsum - dist;
+        g.ri = ri;
+        g.rj = rj;
+        g.rstar = ri * rj / rsum;
+        const bool fi = flag[i] == kFree, fj = flag[j] == kFree;
+        g.mi = fi ? mass[i] : inf;
+        g.mj = fj ? mass[j] : inf;
+        g.Ii = fi ? inertia[i] : inf;
+        g.Ij = fj ? inertia[j] : inf;
+        // m* = mi mj / (mi + mj), one division; a frozen partner counts as infinitely heavy
+        // (two frozen particles: m* = inf).
+        g.mstar = fi && fj ? g.mi * g.mj / (g.mi + g.mj) : (fi ? g.mi : g.mj);
+        const Vec3 vij = v[i] - v[j];
+        g.vn = dot(vij, g.n);
+        const double li = ri - 0.5 * g.delta, lj = rj - 0.5 * g.delta;
+        const Vec3 vrel = vij - cross(omega[i] * li + omega[j] * lj, g.n);
+        g.vt = vrel - g.n * dot(vrel, g.n);
+        g.wrel = omega[i] - omega[j];
+        g.dt = dt;
+        g.want_a = want_a;
+        const bool alive = Law::evaluate(params[size_t(species[i]) * nmat + size_t(species[j])], g, hs[k], out);
+        live[k] = alive;
+        if (alive) {
+          force[i] += out.f;
+          torque[i] += out.ti;
+          if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
+            rev[j].f -= out.f;
+            rev[j].tj += out.tj;
+            if (keep_pair) res[k] = {out.f, out.tj};
+          } else {
+            res[slot_of ? slot_of[k] : k] = {out.f, out.tj};  // gathered by j's thread after the barrier
+          }
+          if (a_pair) a_pair[k] = out.a;
+        }
+      }
+    };
+    // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
+    auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b, Drift& drift)
+                      __attribute__((always_inline)) {
+      // The pairs where i is j, summed on their own in ascending list order (the order of
+      // rpair, and the order in which the row sweep scatters them), then added to i's own row
+      // sum: the same operations whichever way they were collected.
+      Vec3 R, RT;
+      if (kAllLocal || local(uint32_t(i), a, b)) {
+        R = rev[i].f;
+        RT = rev[i].tj;
+        rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
+      } else {
+        for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
+          const uint32_t k = rpair[q];
+          if (live[k]) {
+            const PairResult& r = res[slot_of ? slot_of[k] : k];
+            R -= r.f;
+            RT += r.tj;
+          }
+        }
+      }
+      Vec3 F = force[i] + R, T = torque[i] + RT;
+      // The wall contacts, out of line: rare on most rows, and inline they would keep F and T
+      // in stack memory for every particle (the register allocator spills them around the
+      // loop's body).
+      if (wstart[i] < wstart[i + 1]) {
+        Vec3 Fw = F, Tw = T;
+        wall_contacts(c, i, Fw, Tw);
+        F = Fw;
+        T = Tw;
+      }
+      const bool free_i = flag[i] == kFree;
+      if (free_i) F += grav * mass[i];
+      force[i] = F;
+      torque[i] = T;
+      // Every row that holds a pair of i is done (that is when finish runs): i's velocities
+      // are not read again in this call, and its force is final.
+      // The kicks and the drift work on registers and store each result once: a vector
+      // stored as three scalars and read back at once (v[i] after the closing kick, x[i] for
+      // the displacement) cannot be forwarded from the store buffer and stalls.
+      if (kick_h > 0 && free_i) {
+        const double hm = kick_h / mass[i], hI = kick_h / inertia[i];
+        Vec3 vi = v[i] + F * hm, wi = omega[i] + T * hI;
+        // The next step's opening half-kick and drift (System::step_once's particle pass, the
+        // same operations in the same order), while i is in cache: nothing reads x[i] or v[i]
+        // again in this call. Particles attached to walls are carried by that pass.
+        if (open_dt > 0) {
+          open_free(vi, wi, x[i], F, T, hm, hI, open_dt);
+          nl.add_moved(drift, size_t(i), x[i], radius[i]);
+        }
+        v[i] = vi;
+        omega[i] = wi;
+      } else if (open_dt > 0 && flag[i] == kFrozen) {
+        drift.frozen = true;
+      }
+    };
     // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
     auto block = [&](const long t) __attribute__((always_inline)) {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
@@ -424,6 +402,66 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (open_dt > 0) {
 #pragma omp critical(cohdem_fused_drift)
       c.drift->merge(drift);  // max / min / or: the same in any order
+    }
+  }
+}
+
+template <class Law>
+void ContactModelImpl<Law>::wall_contacts(ForceContext& c, const long i, Vec3& F, Vec3& T) const {
+  ParticleStore& P = c.p;
+  NeighborList& nl = c.nl;
+  State* const __restrict ws = reinterpret_cast<State*>(nl.whist.data.data());
+  uint8_t* const __restrict wlive = nl.whist.live.data();
+  const uint32_t* const __restrict wstart = nl.wstart.data();
+  const uint16_t* const __restrict wall_of = nl.wall.data();
+  const Vec3* const __restrict x = P.x.data();
+  const Vec3* const __restrict v = P.v.data();
+  const Vec3* const __restrict omega = P.omega.data();
+  const double* const __restrict radius = P.radius.data();
+  const double* const __restrict mass = P.mass.data();
+  const double* const __restrict inertia = P.inertia.data();
+  const int32_t* const __restrict species = P.species.data();
+  Vec3* const __restrict f_wall = c.f_wall.data();
+  Vec3* const __restrict tw_wall = c.tw_wall.data();
+  Vec3* const __restrict c_wall = c.c_wall.data();
+  const Wall* const walls = c.walls.data();
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const double dt = c.dt, t = c.t;
+  const bool want_a_wall = c.a_wall != nullptr;
+  for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
+    const Wall& w = walls[wall_of[e]];
+    PairGeom g;
+    double delta;
+    if (!w.contact(x[i], radius[i], g.n, delta) || (!wlive[e] && delta <= 0)) {
+      if (wlive[e]) { ws[e] = State{}; wlive[e] = 0; }
+      continue;
+    }
+    g.delta = delta;
+    g.ri = radius[i];
+    g.rj = 0;
+    g.rstar = g.ri;
+    g.mi = g.mstar = mass[i];
+    g.mj = g.Ij = inf;
+    g.Ii = inertia[i];
+    const double li = g.ri - delta;
+    const Vec3 cp = x[i] - g.n * li;
+    const Vec3 vw = w.velocity_at(cp, t);
+    g.vn = dot(v[i] - vw, g.n);
+    const Vec3 vrel = v[i] - vw - cross(omega[i] * li, g.n);
+    g.vt = vrel - g.n * dot(vrel, g.n);
+    g.wrel = omega[i] - w.omega;
+    g.dt = dt;
+    g.want_a = want_a_wall;
+    PairForce out;
+    const bool alive = Law::evaluate(p(species[i], w.material), g, ws[e], out);
+    wlive[e] = alive;
+    if (alive) {
+      F += out.f;
+      T += out.ti;
+      f_wall[e] = out.f;
+      tw_wall[e] = out.tj;
+      c_wall[e] = cp;
+      if (c.a_wall) c.a_wall[e] = out.a;
     }
   }
 }
