@@ -101,6 +101,9 @@ class NeighborList {
   /// (System::step_once(true)) only they are left for the particle pass, which then skips
   /// the others without reading their flags (and without a parallel region when none is).
   std::vector<uint32_t> attached;
+  /// Particles with wall entries or attached to a wall at the build, ascending: the only ones
+  /// the wall totals (System::compute_forces) read.
+  std::vector<uint32_t> wall_linked;
 
   std::array<Vec3, 27> shift{};  ///< image translations, code (sx+1)*9 + (sy+1)*3 + (sz+1)
   NeighborStats stats;

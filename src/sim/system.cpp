@@ -220,17 +220,23 @@ void System::compute_forces(double kick_h, bool open_next) {
   model->compute(ctx);
 
   // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
-  // of particles (in particle order within a block), then the blocks in order.
+  // of particles (in particle order within a block), then the blocks in order. Only the
+  // particles with wall entries or attached to a wall add anything; the list's record of
+  // them (ascending) is walked, not every particle.
   if (walls.empty()) return;
   const long n = long(particles.size());
   const size_t nwall = walls.size();
   constexpr long kBlock = 4096;
   const long nb = (n + kBlock - 1) / kBlock;
   wall_part_.assign(size_t(nb) * nwall * 2, Vec3{});
+  const std::vector<uint32_t>& linked = nl.wall_linked;
 #pragma omp parallel for schedule(static) if (n > cfg.parallel_min)
   for (long b = 0; b < nb; ++b) {
     Vec3* part = wall_part_.data() + size_t(b) * nwall * 2;  // force, torque of each wall
-    for (long i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+    const long end = std::min(n, (b + 1) * kBlock);
+    for (auto q = std::lower_bound(linked.begin(), linked.end(), uint32_t(b * kBlock));
+         q != linked.end() && long(*q) < end; ++q) {
+      const long i = long(*q);
       for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
         if (!nl.whist.live[e]) continue;
         const size_t w = nl.wall[e];
