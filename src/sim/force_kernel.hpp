@@ -408,59 +408,48 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 
 template <class Law>
 void ContactModelImpl<Law>::wall_contacts(ForceContext& c, const long i, Vec3& F, Vec3& T) const {
-  ParticleStore& P = c.p;
+  // One particle: its values are read once; the wall entries' arrays by index.
+  const ParticleStore& P = c.p;
   NeighborList& nl = c.nl;
-  State* const __restrict ws = reinterpret_cast<State*>(nl.whist.data.data());
-  uint8_t* const __restrict wlive = nl.whist.live.data();
-  const uint32_t* const __restrict wstart = nl.wstart.data();
-  const uint16_t* const __restrict wall_of = nl.wall.data();
-  const Vec3* const __restrict x = P.x.data();
-  const Vec3* const __restrict v = P.v.data();
-  const Vec3* const __restrict omega = P.omega.data();
-  const double* const __restrict radius = P.radius.data();
-  const double* const __restrict mass = P.mass.data();
-  const double* const __restrict inertia = P.inertia.data();
-  const int32_t* const __restrict species = P.species.data();
-  Vec3* const __restrict f_wall = c.f_wall.data();
-  Vec3* const __restrict tw_wall = c.tw_wall.data();
-  Vec3* const __restrict c_wall = c.c_wall.data();
-  const Wall* const walls = c.walls.data();
+  State* const ws = reinterpret_cast<State*>(nl.whist.data.data());
+  const Vec3 xi = P.x[i], vi = P.v[i], wi = P.omega[i];
+  const double ri = P.radius[i], mi = P.mass[i], Ii = P.inertia[i];
+  const int si = P.species[i];
   constexpr double inf = std::numeric_limits<double>::infinity();
-  const double dt = c.dt, t = c.t;
-  const bool want_a_wall = c.a_wall != nullptr;
-  for (uint32_t e = wstart[i]; e < wstart[i + 1]; ++e) {
-    const Wall& w = walls[wall_of[e]];
+  for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e) {
+    const Wall& w = c.walls[nl.wall[e]];
+    uint8_t& live = nl.whist.live[e];
     PairGeom g;
     double delta;
-    if (!w.contact(x[i], radius[i], g.n, delta) || (!wlive[e] && delta <= 0)) {
-      if (wlive[e]) { ws[e] = State{}; wlive[e] = 0; }
+    if (!w.contact(xi, ri, g.n, delta) || (!live && delta <= 0)) {
+      if (live) { ws[e] = State{}; live = 0; }
       continue;
     }
     g.delta = delta;
-    g.ri = radius[i];
+    g.ri = ri;
     g.rj = 0;
     g.rstar = g.ri;
-    g.mi = g.mstar = mass[i];
+    g.mi = g.mstar = mi;
     g.mj = g.Ij = inf;
-    g.Ii = inertia[i];
+    g.Ii = Ii;
     const double li = g.ri - delta;
-    const Vec3 cp = x[i] - g.n * li;
-    const Vec3 vw = w.velocity_at(cp, t);
-    g.vn = dot(v[i] - vw, g.n);
-    const Vec3 vrel = v[i] - vw - cross(omega[i] * li, g.n);
+    const Vec3 cp = xi - g.n * li;
+    const Vec3 vw = w.velocity_at(cp, c.t);
+    g.vn = dot(vi - vw, g.n);
+    const Vec3 vrel = vi - vw - cross(wi * li, g.n);
     g.vt = vrel - g.n * dot(vrel, g.n);
-    g.wrel = omega[i] - w.omega;
-    g.dt = dt;
-    g.want_a = want_a_wall;
+    g.wrel = wi - w.omega;
+    g.dt = c.dt;
+    g.want_a = c.a_wall != nullptr;
     PairForce out;
-    const bool alive = Law::evaluate(p(species[i], w.material), g, ws[e], out);
-    wlive[e] = alive;
+    const bool alive = Law::evaluate(p(si, w.material), g, ws[e], out);
+    live = alive;
     if (alive) {
       F += out.f;
       T += out.ti;
-      f_wall[e] = out.f;
-      tw_wall[e] = out.tj;
-      c_wall[e] = cp;
+      c.f_wall[e] = out.f;
+      c.tw_wall[e] = out.tj;
+      c.c_wall[e] = cp;
       if (c.a_wall) c.a_wall[e] = out.a;
     }
   }
