@@ -1,5 +1,7 @@
 // Everything one force evaluation reads and writes.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -50,12 +52,23 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi
 /// stored pair instead of per list entry). Split and map are redone when the list or the
 /// thread count changes. Also holds, per thread, the particles left for after the kernel's
 /// barrier (with or without recording).
+///
+/// The work model is rough (its weights are costs on one machine and one problem; wall
+/// contacts are not in it, and a core shared with other work is slower), so the split is
+/// corrected by measurement: the kernel times each thread's sweep of its block (measured()),
+/// and every kRebalanceCalls calls the blocks' shares of the modelled work are set so that
+/// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
+/// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
+/// results bit-identical; it only moves where the threads meet.
 struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
   /// Work of a particle, in units of one screened list entry: the particle's own share
   /// (finish, half-kicks, drift) and each contact evaluated. Rough costs on the chute (ns,
   /// one thread): about 15 per particle, 4 per entry, 60 per contact.
   static constexpr uint64_t kWorkParticle = 4, kWorkContact = 15;
+  /// Force calls between rebalances: enough sweeps that the sums of their times are not
+  /// ruled by one interrupted step, few enough to follow a flow whose dense region moves.
+  static constexpr uint32_t kRebalanceCalls = 32;
   std::vector<long> bound;   ///< thread t sweeps particles [bound[t], bound[t + 1])
   std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
   uint32_t count = 0;        ///< slots in use
@@ -67,6 +80,24 @@ struct PairSlots {
   long threads = 0, n = 0;
   size_t np = 0;
   bool mapped = false;  ///< `of` and `count` belong to the current split
+  /// Share of the total modelled work that thread t's block gets (sums to 1; equal until
+  /// the first rebalance, and again whenever the thread count changes).
+  std::vector<double> share;
+  /// Modelled work of each block of the current split.
+  std::vector<uint64_t> work;
+  /// Since the last rebalance, per thread: seconds spent sweeping its block (written by that
+  /// thread only, in the kernel) and the modelled work of the blocks it swept.
+  std::vector<double> busy;
+  std::vector<double> swept;
+  uint32_t calls = 0;      ///< force calls timed since the last rebalance
+  bool stale = false;      ///< the shares changed: plan() splits again at its next call
+  uint64_t rebalances = 0; ///< splits moved by measurement (for tests and diagnostics)
+  /// Per list build: the modelled work of particles [0, i) (n + 1 entries), and the widest
+  /// dependency range, max(dep_hi - dep_lo), which bounds how far from a block boundary a
+  /// row can hold a pair that is not local (update()).
+  std::vector<uint64_t> prefix;
+  long span = 0;
+
   /// Work of particle i: kWorkParticle, one per list entry of its row, kWorkContact per live
   /// contact (the contacts carried over at the last build).
   static uint64_t work_of(const NeighborList& nl, long i) {
@@ -74,42 +105,119 @@ struct PairSlots {
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];
     return w;
   }
-  /// Splits n particles into nt contiguous blocks of about equal work (work_of). Which thread
-  /// sweeps which particle never changes what is summed or in which order
-  /// (force_kernel.hpp), so results do not depend on the split. Redone when the list or
-  /// the counts change.
+  /// Splits n particles into nt contiguous blocks, block t holding about share[t] of the
+  /// total work (work_of; equal shares until measured). Which thread sweeps which particle
+  /// never changes what is summed or in which order (force_kernel.hpp), so results do not
+  /// depend on the split. The work is summed once per list build; a new split from new
+  /// shares is a search in those sums.
   void plan(const NeighborList& nl, long n_, long nt) {
-    if (builds == nl.stats.builds && threads == nt && n == n_ && np == nl.pair_count()) return;
+    const bool new_list = builds != nl.stats.builds || n != n_ || np != nl.pair_count();
+    if (!stale && !new_list && threads == nt) return;
+    if (threads != nt || share.size() != size_t(nt)) {
+      share.assign(size_t(nt), 1.0 / double(nt));
+      busy.assign(size_t(nt), 0.0);
+      swept.assign(size_t(nt), 0.0);
+      calls = 0;
+    }
+    stale = false;
+    mapped = false;
     builds = nl.stats.builds;
     threads = nt;
     n = n_;
     np = nl.pair_count();
-    mapped = false;
-    uint64_t total = 0;
-    for (long i = 0; i < n; ++i) total += work_of(nl, i);
-    bound.assign(size_t(nt + 1), n);
-    bound[0] = 0;
-    uint64_t sum = 0;
-    long t = 1;
-    for (long i = 0; i < n && t < nt; ++i) {
-      while (t < nt && sum * uint64_t(nt) >= total * uint64_t(t)) bound[size_t(t++)] = i;
-      sum += work_of(nl, i);
+    if (new_list || prefix.size() != size_t(n + 1)) {
+      prefix.assign(size_t(n + 1), 0);
+      span = 0;
+      for (long i = 0; i < n; ++i) {
+        prefix[size_t(i + 1)] = prefix[size_t(i)] + work_of(nl, i);
+        span = std::max(span, long(nl.dep_hi[size_t(i)]) - long(nl.dep_lo[size_t(i)]));
+      }
+      map_all = true;
     }
+    // Block t ends at the first particle where the work before it reaches the shares of
+    // blocks 0..t (a running sum of the shares; the last block takes the rest).
+    const double total = double(prefix[size_t(n)]);
+    bound.assign(size_t(nt + 1), n);
+    work.assign(size_t(nt), 0);
+    bound[0] = 0;
+    double cum = 0;
+    for (long t = 1; t < nt; ++t) {
+      cum += share[size_t(t - 1)];
+      const double cut = cum * total;
+      // first i in [bound[t-1], n] with prefix[i] >= cut
+      const auto it = std::lower_bound(prefix.begin() + bound[size_t(t - 1)], prefix.end(), cut,
+                                       [](const uint64_t w, const double c) { return double(w) < c; });
+      bound[size_t(t)] = std::min(n, long(it - prefix.begin()));
+    }
+    for (long t = 0; t < nt; ++t) work[size_t(t)] = prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])];
   }
-  /// plan(), then the slot map for its blocks.
+  /// Thread t swept its block in `seconds` (called by that thread in the kernel).
+  void measured(long t, double seconds) {
+    busy[size_t(t)] += seconds;
+    swept[size_t(t)] += double(work[size_t(t)]);
+  }
+  /// After a force call whose threads each called measured(): every kRebalanceCalls calls,
+  /// each thread's time per unit of modelled work sets the new shares (share ~ 1 / time per
+  /// unit), moved halfway from the old ones (the time per unit of a block changes as its
+  /// boundary moves, and halving damps the overshoot). The split is redone only when a
+  /// share moves by more than 0.2 % of the total work.
+  void rebalance() {
+    if (++calls < kRebalanceCalls) return;
+    calls = 0;
+    const size_t nt = share.size();
+    std::vector<double> inv(nt, 0.0);
+    double inv_sum = 0;
+    bool timed = true;
+    for (size_t t = 0; t < nt; ++t) {
+      timed = timed && busy[t] > 0 && swept[t] > 0;  // an empty block or no timing: keep the split
+      inv[t] = timed ? swept[t] / busy[t] : 0.0;
+      inv_sum += inv[t];
+    }
+    std::fill(busy.begin(), busy.end(), 0.0);
+    std::fill(swept.begin(), swept.end(), 0.0);
+    if (!timed) return;
+    double moved = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      const double s = 0.5 * (share[t] + inv[t] / inv_sum);
+      moved = std::max(moved, std::abs(s - share[t]));
+      inv[t] = s;
+    }
+    if (moved < 0.002) return;
+    share = inv;
+    stale = true;
+    ++rebalances;
+  }
+  /// plan(), then the slot map for its blocks. A pair that is not local to its row's block
+  /// lies within `span` rows of a boundary between blocks (its partner's rows reach across
+  /// it), so only those rows are mapped; elsewhere `of` is never read. After a new list the
+  /// whole map is cleared first.
   void update(const NeighborList& nl, long n_, long nt) {
     plan(nl, n_, nt);
     if (mapped) return;
     mapped = true;
-    of.assign(np, kNone);
+    if (map_all) {
+      of.assign(np, kNone);
+      map_all = false;
+    }
     count = 0;
-    for (long t = 0; t < nt; ++t) {
-      const long a = bound[size_t(t)], b = bound[size_t(t + 1)];
-      for (long i = a; i < b; ++i)
+    long from = 0;  // rows before it are mapped (or need no slot)
+    for (long t = 1; t < nt; ++t) {
+      const long p = bound[size_t(t)];
+      const long lo = std::max(from, p - span), hi = std::min(n, p + span);
+      for (long i = lo; i < hi; ++i) {
+        // the block of row i
+        long u = 0;
+        while (bound[size_t(u + 1)] <= i) ++u;
+        const long a = bound[size_t(u)], b = bound[size_t(u + 1)];
         for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-          if (!local_to_block(nl.dep_lo.data(), nl.dep_hi.data(), nl.jdx[k], a, b)) of[k] = count++;
+          of[k] = local_to_block(nl.dep_lo.data(), nl.dep_hi.data(), nl.jdx[k], a, b) ? kNone : count++;
+      }
+      from = std::max(from, hi);
     }
   }
+
+ private:
+  bool map_all = true;  ///< the next update() clears the whole map (a new list)
 };
 
 struct ForceContext {

@@ -14,7 +14,8 @@
 //   (ForceContext::open_dt), the next step's opening half-kick and drift.
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
-// (of about equal work: PairSlots::plan) and pass 2 of each particle as soon as the rows it
+// (of about equal work: PairSlots::plan, corrected by the threads' measured sweep times,
+// PairSlots::rebalance) and pass 2 of each particle as soon as the rows it
 // depends on are done; particles that
 // depend on another block wait for the single barrier, after which they are shared out
 // evenly among the threads. The row sweep scatters j's share straight into j's reverse sums
@@ -60,6 +61,13 @@ COHDEM_INLINE V2 load_xy(const Vec3& v) {
   V2 r;
   std::memcpy(&r, &v.x, sizeof r);
   return r;
+}
+
+/// Appends particles [q0, q1) to a thread's list of particles left for after the barrier;
+/// out of line, so that the list's growth path does not weigh on the registers of the force
+/// loop it is called from (several threads only).
+[[gnu::noinline]] inline void defer_range(std::vector<uint32_t>& list, const long q0, const long q1) {
+  for (long q = q0; q < q1; ++q) list.push_back(uint32_t(q));
 }
 
 template <class Law>
@@ -148,6 +156,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // private copies stay in registers or one stack slot (the linear chute: 599 -> 557
   // instructions per particle-step, bit-identical). res and slot_of stay shared: a team of
   // another size sets them inside the region.
+  bool timed = false;  // the region's threads timed their sweeps
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
                                                   keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat)
@@ -275,14 +284,16 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         }
       }
     };
-    // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i).
-    auto finish = [&]<bool kAllLocal>(const long i, const long a, const long b, Drift& drift)
+    // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i). kLocal: i is
+    // known to be local to [a, b) (one thread; or finished during the sweep, which finishes
+    // only particles whose rows all lie in its block), so the test is left out.
+    auto finish = [&]<bool kLocal>(const long i, const long a, const long b, Drift& drift)
                       __attribute__((always_inline)) {
       // The pairs where i is j, summed on their own in ascending list order (the order of
       // rpair, and the order in which the row sweep scatters them), then added to i's own row
       // sum: the same operations whichever way they were collected.
       Vec3 R, RT;
-      if (kAllLocal || local(uint32_t(i), a, b)) {
+      if (kLocal || local(uint32_t(i), a, b)) {
         R = rev[i].f;
         RT = rev[i].tj;
         rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
@@ -341,8 +352,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
     // block; those, and the ones depending on earlier blocks, are finished after the barrier.
     // One thread (a = 0, b = n) takes the same path with every particle local (kAllLocal:
-    // no locality tests; nothing is left for after the barrier).
-    auto sweep = [&]<bool kAllLocal>() __attribute__((always_inline)) {
+    // no locality tests; nothing is left for after the barrier). Several: the particles met
+    // on the way that depend on an earlier block are handed to `defer` (ascending), so that
+    // no second pass over the block has to look for them.
+    auto sweep = [&]<bool kAllLocal>(auto&& defer) __attribute__((always_inline)) {
       // Batches of kBatch entries (the last of the block shorter); i: the first row not yet
       // done, k: its first entry not yet screened. Rows done, [.., i), may be finished.
       long next = a, i = a;
@@ -353,31 +366,36 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
         i = i1;
         k = ke;
-        for (; next < i && long(dep_hi[next]) < i; ++next)
-          if (kAllLocal || long(dep_lo[next]) >= a) finish.template operator()<kAllLocal>(next, a, b, drift);
+        for (; next < i && long(dep_hi[next]) < i; ++next) {
+          // Every row of `next` is done and below b: local when none lies before a.
+          if (kAllLocal || long(dep_lo[next]) >= a)
+            finish.template operator()<true>(next, a, b, drift);
+          else
+            defer(next);
+        }
       }
       return next;
     };
-    // The particles of the block left for after the barrier, in ascending order: those
-    // depending on an earlier block, and all from `next` on (one thread: only the latter).
-    auto each_left = [&]<bool kAllLocal>(const long next, auto&& f) __attribute__((always_inline)) {
-      if constexpr (!kAllLocal)
-        for (long q = a; q < next; ++q)
-          if (long(dep_lo[q]) < a) f(q);
-      for (long q = next; q < b; ++q) f(q);
-    };
-    const long next = nt == 1 ? sweep.template operator()<true>() : sweep.template operator()<false>();
+    // The particles left for after the barrier are not spread evenly: a block's first
+    // particles depend on the rows of the block before (the plane of cells across the
+    // boundary), the first block's on none. On several threads each lists its own (those the
+    // sweep deferred, then all from `next` on: ascending). With a PairSlots all of them are
+    // shared out in equal parts after the barrier; finish() is told the block that owns the
+    // particle (its locality test is the owner's), so what is summed, and in which order, is
+    // the same whichever thread finishes it. Without one, each thread finishes its own.
+    std::vector<uint32_t> own;  // without a PairSlots
+    std::vector<uint32_t>* const mine = share ? &c.slots->deferred[size_t(tid)] : &own;
+    mine->clear();
+    auto none = [](const long) __attribute__((always_inline)) {};
+    const double t_sweep = share ? omp_get_wtime() : 0.0;
+    const long next =
+        nt == 1 ? sweep.template operator()<true>(none)
+                : sweep.template operator()<false>(
+                      [&](const long q) __attribute__((always_inline)) { defer_range(*mine, q, q + 1); });
+    if (nt > 1) defer_range(*mine, next, b);
     if (share) {
-      // The particles left for after the barrier are not spread evenly: a block's first
-      // particles depend on the rows of the block before (the plane of cells across the
-      // boundary), the first block's on none. Each thread lists its own, and after the
-      // barrier all of them are shared out in equal parts. finish() is told the block that
-      // owns the particle (its locality test is the owner's), so what is summed, and in which
-      // order, is the same whichever thread finishes it.
-      std::vector<uint32_t>& mine = c.slots->deferred[size_t(tid)];
-      mine.clear();
-      each_left.template operator()<false>(
-          next, [&](const long q) __attribute__((always_inline)) { mine.push_back(uint32_t(q)); });
+      c.slots->measured(tid, omp_get_wtime() - t_sweep);
+      if (tid == 0) timed = true;
 #pragma omp barrier
       size_t total = 0;
       for (long t = 0; t < nt; ++t) total += c.slots->deferred[size_t(t)].size();
@@ -393,17 +411,16 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     } else {
 #pragma omp barrier
       if (nt == 1)
-        each_left.template operator()<true>(
-            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<true>(q, a, b, drift); });
+        for (long q = next; q < b; ++q) finish.template operator()<true>(q, a, b, drift);
       else
-        each_left.template operator()<false>(
-            next, [&](const long q) __attribute__((always_inline)) { finish.template operator()<false>(q, a, b, drift); });
+        for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
     }
     if (open_dt > 0) {
 #pragma omp critical(cohdem_fused_drift)
       c.drift->merge(drift);  // max / min / or: the same in any order
     }
   }
+  if (timed) c.slots->rebalance();
 }
 
 template <class Law>

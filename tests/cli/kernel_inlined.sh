@@ -6,7 +6,8 @@
 # of the optimized binary and fails on any call into cohdem's own code other than the wall
 # geometry (rare entries), the wall contacts of a particle (ContactModelImpl::wall_contacts,
 # kept out of line on purpose: only particles with wall entries call it), the thread
-# split's set-up (PairSlots, once per list build) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
+# split's set-up (PairSlots, once per list build), the list of particles a thread leaves for
+# after the barrier (defer_range, several threads only) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
 # libgomp; operator new/delete) are allowed. Skipped, saying so, for a build that is not
 # optimized (Debug), where nothing is inlined.
 set -u
@@ -27,7 +28,7 @@ objdump -d --no-show-raw-insn -C "$bin" | awk '
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::defer_range\(/) next
     bad[t]++
   }
   END {

@@ -360,3 +360,93 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
     }
   }
 }
+
+// The split follows measured sweep times (PairSlots::rebalance): a thread that took twice
+// as long per unit of modelled work gets a smaller share, moved halfway from the old one:
+// shares 1/2, 1/2 with times per unit 2 : 1 aim at 1/3, 2/3 and become 5/12, 7/12 (exact
+// in binary to the last bit of the arithmetic below). Below kRebalanceCalls calls nothing
+// moves; a share moving by less than 0.2 % of the work keeps the split.
+TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
+  auto s = make_box(1, false);
+  s->run(50);
+  PairSlots ps;
+  ps.plan(s->nl, long(s->particles.size()), 2);
+  ASSERT_EQ(ps.share.size(), 2u);
+  for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
+    ps.busy = {2.0 * double(ps.work[0]), 1.0 * double(ps.work[1])};  // seconds per unit: 2 and 1
+    ps.swept = {double(ps.work[0]), double(ps.work[1])};
+    EXPECT_FALSE(ps.stale);
+    ps.rebalance();
+  }
+  EXPECT_TRUE(ps.stale);
+  EXPECT_EQ(ps.rebalances, 1u);
+  EXPECT_NEAR(ps.share[0], 5.0 / 12.0, 1e-15);
+  EXPECT_NEAR(ps.share[1], 7.0 / 12.0, 1e-15);
+  const long b_old = ps.bound[1];
+  ps.plan(s->nl, long(s->particles.size()), 2);
+  EXPECT_FALSE(ps.stale);
+  EXPECT_LT(ps.bound[1], b_old);  // block 0 shrank
+  const double total = double(ps.prefix.back());
+  EXPECT_NEAR(double(ps.work[0]) / total, 5.0 / 12.0, 0.05);  // to within one particle's work
+  // times per unit in proportion to 1/share: the shares aim where they are and stay put
+  for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
+    ps.busy = {double(ps.work[0]) / ps.share[0], double(ps.work[1]) / ps.share[1]};
+    ps.swept = {double(ps.work[0]), double(ps.work[1])};
+    ps.rebalance();
+  }
+  EXPECT_EQ(ps.rebalances, 1u);
+}
+
+// Whatever the split (equal, skewed either way, changed between calls so that the slot map
+// is redone only near the boundaries), the force loop on 2 and 3 threads with the compact
+// per-pair buffers gives forces, torques and contact history identical to one thread, bit
+// for bit.
+TEST(Threads, AnySplitOfTheForceLoopGivesIdenticalResults) {
+  auto s = make_box(1, false);
+  s->run(150);
+  ParticleStore& P = s->particles;
+  const size_t n = P.size();
+  const std::vector<std::byte> hist0 = s->nl.hist.data, whist0 = s->nl.whist.data;
+  const std::vector<uint8_t> live0 = s->nl.hist.live, wlive0 = s->nl.whist.live;
+  struct Out {
+    std::vector<Vec3> f, t;
+    std::vector<std::byte> hist;
+  };
+  auto forces = [&](PairSlots* ps) {
+    s->nl.hist.data = hist0; s->nl.whist.data = whist0;
+    s->nl.hist.live = live0; s->nl.whist.live = wlive0;
+    std::vector<PairResult> pair(s->nl.pair_count()), rev(n);
+    std::vector<Vec3> fw(s->nl.wall_entry_count()), tw(fw.size()), cw(fw.size());
+    ForceContext c{P, s->nl, s->walls, s->cfg.dt, s->time, pair, rev, fw, tw, cw, s->cfg.gravity};
+    c.keep_pair = false;
+    c.slots = ps;
+    s->model->compute(c);
+    return Out{P.force, P.torque, s->nl.hist.data};
+  };
+  omp_set_num_threads(1);
+  const Out ref = forces(nullptr);
+  for (int threads : {2, 3}) {
+    omp_set_num_threads(threads);
+    PairSlots ps;  // kept across calls: later splits remap only near the boundaries
+    const std::vector<std::vector<double>> splits =
+        threads == 2 ? std::vector<std::vector<double>>{{0.5, 0.5}, {0.15, 0.85}, {0.8, 0.2}, {0.45, 0.55}}
+                     : std::vector<std::vector<double>>{{1. / 3, 1. / 3, 1. / 3}, {0.1, 0.2, 0.7}, {0.6, 0.3, 0.1}};
+    for (const auto& sh : splits) {
+      if (!ps.share.empty()) {
+        ps.share = sh;
+        ps.stale = true;
+      } else {
+        ps.update(s->nl, long(n), threads);  // the first call sets up equal shares
+        ps.share = sh;
+        ps.stale = true;
+      }
+      const Out o = forces(&ps);
+      EXPECT_EQ(ps.bound.size(), size_t(threads + 1));
+      size_t bad = 0;
+      for (size_t i = 0; i < n; ++i) bad += !(o.f[i] == ref.f[i] && o.t[i] == ref.t[i]);
+      EXPECT_EQ(bad, 0u) << threads << " threads, share[0] " << sh[0];
+      EXPECT_TRUE(o.hist == ref.hist) << threads << " threads, share[0] " << sh[0];
+    }
+  }
+  omp_set_num_threads(1);
+}
