@@ -69,6 +69,8 @@ struct PairSlots {
   /// Force calls between rebalances: enough sweeps that the sums of their times are not
   /// ruled by one interrupted step, few enough to follow a flow whose dense region moves.
   static constexpr uint32_t kRebalanceCalls = 32;
+  /// The smallest share a block is given, as a fraction of an equal share.
+  static constexpr double kMinShare = 0.25;
   std::vector<long> bound;   ///< thread t sweeps particles [bound[t], bound[t + 1])
   std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
   uint32_t count = 0;        ///< slots in use
@@ -159,8 +161,8 @@ struct PairSlots {
   /// After a force call whose threads each called measured(): every kRebalanceCalls calls,
   /// each thread's time per unit of modelled work sets the new shares (share ~ 1 / time per
   /// unit), moved halfway from the old ones (the time per unit of a block changes as its
-  /// boundary moves, and halving damps the overshoot). The split is redone only when a
-  /// share moves by more than 0.2 % of the total work.
+  /// boundary moves, and halving damps the overshoot), none below kMinShare of an equal
+  /// share. The split is redone only when a share moves by more than 0.2 % of the total work.
   void rebalance() {
     if (++calls < kRebalanceCalls) return;
     calls = 0;
@@ -176,11 +178,21 @@ struct PairSlots {
     std::fill(busy.begin(), busy.end(), 0.0);
     std::fill(swept.begin(), swept.end(), 0.0);
     if (!timed) return;
+    // Halfway to the aim, and at least a quarter of an equal share: a thread that was held
+    // up for a while (its core taken by other work) keeps a block to time, so its share can
+    // come back when it is fast again.
+    // (The halfway shares sum to 1; those below the floor are raised to it and the others
+    // scaled down to leave the sum at 1.)
+    const double floor = kMinShare / double(nt);
+    double low = 0, rest = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      inv[t] = 0.5 * (share[t] + inv[t] / inv_sum);
+      if (inv[t] < floor) low += floor; else rest += inv[t];
+    }
     double moved = 0;
     for (size_t t = 0; t < nt; ++t) {
-      const double s = 0.5 * (share[t] + inv[t] / inv_sum);
-      moved = std::max(moved, std::abs(s - share[t]));
-      inv[t] = s;
+      inv[t] = inv[t] < floor ? floor : inv[t] * (1.0 - low) / rest;
+      moved = std::max(moved, std::abs(inv[t] - share[t]));
     }
     if (moved < 0.002) return;
     share = inv;

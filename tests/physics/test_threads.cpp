@@ -395,6 +395,17 @@ TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
     ps.rebalance();
   }
   EXPECT_EQ(ps.rebalances, 1u);
+  // a thread held up (1000x slower per unit, for many rebalances) keeps a quarter of an
+  // equal share, so its block is never empty and is timed again
+  for (int r = 0; r < 40; ++r)
+    for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
+      ps.busy = {1000.0 * double(ps.work[0]), double(ps.work[1])};
+      ps.swept = {double(ps.work[0]), double(ps.work[1])};
+      ps.rebalance();
+      ps.plan(s->nl, long(s->particles.size()), 2);
+    }
+  EXPECT_NEAR(ps.share[0], PairSlots::kMinShare / 2, 1e-12);
+  EXPECT_GT(ps.bound[1], 0);
 }
 
 // Whatever the split (equal, skewed either way, changed between calls so that the slot map
