@@ -49,8 +49,8 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi
 /// and dense bottom layers against its dilute top). Only pairs whose j is not local to the
 /// sweeping thread's block (near a block boundary) are stored, each in its own slot of a
 /// compact buffer, so the buffer holds those pairs rather than the whole list (48 bytes per
-/// stored pair instead of per list entry). Split and map are redone when the list or the
-/// thread count changes. Also holds, per thread, the particles left for after the kernel's
+/// stored pair instead of per list entry). Split and map are redone when the list, the
+/// thread count or the shares (below) change. Also holds, per thread, the particles left for after the kernel's
 /// barrier (with or without recording).
 ///
 /// The work model is rough (its weights are costs on one machine and one problem; wall
