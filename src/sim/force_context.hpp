@@ -85,8 +85,6 @@ struct PairSlots {
   /// Share of the total modelled work that thread t's block gets (sums to 1; equal until
   /// the first rebalance, and again whenever the thread count changes).
   std::vector<double> share;
-  /// Modelled work of each block of the current split.
-  std::vector<uint64_t> work;
   /// Since the last rebalance, per thread: seconds spent sweeping its block (written by that
   /// thread only, in the kernel) and the modelled work of the blocks it swept.
   std::vector<double> busy;
@@ -140,7 +138,6 @@ struct PairSlots {
     // blocks 0..t (a running sum of the shares; the last block takes the rest).
     const double total = double(prefix[size_t(n)]);
     bound.assign(size_t(nt + 1), n);
-    work.assign(size_t(nt), 0);
     bound[0] = 0;
     double cum = 0;
     for (long t = 1; t < nt; ++t) {
@@ -151,12 +148,13 @@ struct PairSlots {
                                        [](const uint64_t w, const double c) { return double(w) < c; });
       bound[size_t(t)] = std::min(n, long(it - prefix.begin()));
     }
-    for (long t = 0; t < nt; ++t) work[size_t(t)] = prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])];
   }
+  /// Modelled work of block t of the current split.
+  uint64_t block_work(long t) const { return prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])]; }
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
   void measured(long t, double seconds) {
     busy[size_t(t)] += seconds;
-    swept[size_t(t)] += double(work[size_t(t)]);
+    swept[size_t(t)] += double(block_work(t));
   }
   /// After a force call whose threads each called measured(): every kRebalanceCalls calls,
   /// each thread's time per unit of modelled work sets the new shares (share ~ 1 / time per

@@ -77,6 +77,31 @@ State run(int threads, bool record = false) {
   return st;
 }
 
+// The contact history of a list, saved so that several force evaluations start from it.
+struct SavedHistory {
+  std::vector<std::byte> hist, whist;
+  std::vector<uint8_t> live, wlive;
+  explicit SavedHistory(const NeighborList& nl)
+      : hist(nl.hist.data), whist(nl.whist.data), live(nl.hist.live), wlive(nl.whist.live) {}
+  void restore(NeighborList& nl) const {
+    nl.hist.data = hist; nl.whist.data = whist;
+    nl.hist.live = live; nl.whist.live = wlive;
+  }
+};
+
+// One force evaluation of s's force loop without recording, with the compact per-pair
+// buffers of `ps` (null: per-entry buffers) and the closing half-kick kick_h (0: none).
+void force_call(System& s, PairSlots* ps, double kick_h) {
+  const size_t n = s.particles.size();
+  std::vector<PairResult> pair(s.nl.pair_count()), rev(n);
+  std::vector<Vec3> fw(s.nl.wall_entry_count()), tw(fw.size()), cw(fw.size());
+  ForceContext c{s.particles, s.nl, s.walls, s.cfg.dt, s.time, pair, rev, fw, tw, cw, s.cfg.gravity};
+  c.keep_pair = false;
+  c.slots = ps;
+  c.kick_h = kick_h;
+  s.model->compute(c);
+}
+
 }  // namespace
 
 TEST(Threads, OneAndTwoThreadsGiveIdenticalStates) {
@@ -128,21 +153,13 @@ TEST(Threads, ClosingHalfKickInTheKernelEqualsASeparatePass) {
       ParticleStore& P = s->particles;
       const size_t n = P.size();
       const double h = 0.5 * s->cfg.dt;
-      const std::vector<std::byte> hist0 = s->nl.hist.data, whist0 = s->nl.whist.data;
-      const std::vector<uint8_t> live0 = s->nl.hist.live, wlive0 = s->nl.whist.live;
+      const SavedHistory saved(s->nl);
       const std::vector<Vec3> v0 = P.v, w0 = P.omega;
       auto forces = [&](double kick_h) {
-        s->nl.hist.data = hist0; s->nl.whist.data = whist0;
-        s->nl.hist.live = live0; s->nl.whist.live = wlive0;
+        saved.restore(s->nl);
         P.v = v0; P.omega = w0;
-        std::vector<PairResult> pair(s->nl.pair_count()), rev(n);
-        std::vector<Vec3> fw(s->nl.wall_entry_count()), tw(fw.size()), cw(fw.size());
         PairSlots ps;
-        ForceContext c{P, s->nl, s->walls, s->cfg.dt, s->time, pair, rev, fw, tw, cw, s->cfg.gravity};
-        c.keep_pair = false;
-        c.slots = slots ? &ps : nullptr;
-        c.kick_h = kick_h;
-        s->model->compute(c);
+        force_call(*s, slots ? &ps : nullptr, kick_h);
       };
       forces(0);
       const std::vector<Vec3> F = P.force, T = P.torque;
@@ -373,8 +390,8 @@ TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
   ps.plan(s->nl, long(s->particles.size()), 2);
   ASSERT_EQ(ps.share.size(), 2u);
   for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
-    ps.busy = {2.0 * double(ps.work[0]), 1.0 * double(ps.work[1])};  // seconds per unit: 2 and 1
-    ps.swept = {double(ps.work[0]), double(ps.work[1])};
+    ps.busy = {2.0 * double(ps.block_work(0)), 1.0 * double(ps.block_work(1))};  // seconds per unit: 2 and 1
+    ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
     EXPECT_FALSE(ps.stale);
     ps.rebalance();
   }
@@ -387,11 +404,11 @@ TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
   EXPECT_FALSE(ps.stale);
   EXPECT_LT(ps.bound[1], b_old);  // block 0 shrank
   const double total = double(ps.prefix.back());
-  EXPECT_NEAR(double(ps.work[0]) / total, 5.0 / 12.0, 0.05);  // a split between particles: one holds < 1 % of the work
+  EXPECT_NEAR(double(ps.block_work(0)) / total, 5.0 / 12.0, 0.05);  // a split between particles: one holds < 1 % of the work
   // times per unit in proportion to 1/share: the shares aim where they are and stay put
   for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
-    ps.busy = {double(ps.work[0]) / ps.share[0], double(ps.work[1]) / ps.share[1]};
-    ps.swept = {double(ps.work[0]), double(ps.work[1])};
+    ps.busy = {double(ps.block_work(0)) / ps.share[0], double(ps.block_work(1)) / ps.share[1]};
+    ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
     ps.rebalance();
   }
   EXPECT_EQ(ps.rebalances, 1u);
@@ -399,8 +416,8 @@ TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
   // equal share, so its block is never empty and is timed again
   for (int r = 0; r < 40; ++r)
     for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
-      ps.busy = {1000.0 * double(ps.work[0]), double(ps.work[1])};
-      ps.swept = {double(ps.work[0]), double(ps.work[1])};
+      ps.busy = {1000.0 * double(ps.block_work(0)), double(ps.block_work(1))};
+      ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
       ps.rebalance();
       ps.plan(s->nl, long(s->particles.size()), 2);
     }
@@ -417,21 +434,14 @@ TEST(Threads, AnySplitOfTheForceLoopGivesIdenticalResults) {
   s->run(150);
   ParticleStore& P = s->particles;
   const size_t n = P.size();
-  const std::vector<std::byte> hist0 = s->nl.hist.data, whist0 = s->nl.whist.data;
-  const std::vector<uint8_t> live0 = s->nl.hist.live, wlive0 = s->nl.whist.live;
+  const SavedHistory saved(s->nl);
   struct Out {
     std::vector<Vec3> f, t;
     std::vector<std::byte> hist;
   };
   auto forces = [&](PairSlots* ps) {
-    s->nl.hist.data = hist0; s->nl.whist.data = whist0;
-    s->nl.hist.live = live0; s->nl.whist.live = wlive0;
-    std::vector<PairResult> pair(s->nl.pair_count()), rev(n);
-    std::vector<Vec3> fw(s->nl.wall_entry_count()), tw(fw.size()), cw(fw.size());
-    ForceContext c{P, s->nl, s->walls, s->cfg.dt, s->time, pair, rev, fw, tw, cw, s->cfg.gravity};
-    c.keep_pair = false;
-    c.slots = ps;
-    s->model->compute(c);
+    saved.restore(s->nl);
+    force_call(*s, ps, 0);
     return Out{P.force, P.torque, s->nl.hist.data};
   };
   omp_set_num_threads(1);
