@@ -20,6 +20,7 @@
 #include "io/contact_network.hpp"
 #include "io/csv.hpp"
 #include "io/vtk.hpp"
+#include "sim/screen.hpp"
 #include "thermal/thermal.hpp"
 
 namespace cohdem {
@@ -276,6 +277,8 @@ int run_case(const Case& c, const RunOptions& opt) {
   const uint64_t nsteps = c.steps();
   spdlog::info("{} particles, {} walls, {} steps of {:.3g} s ({:.4g} s), contact model {} (rolling {}), output in {}",
                s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
+  spdlog::info("force loop: {} thread(s), list screening {}", c.cfg.threads > 0 ? c.cfg.threads : omp_get_max_threads(),
+               screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)" : "scalar");
 
   if (!resuming) s.prepare();
   Series S = series_columns(c, s);
@@ -430,6 +433,7 @@ int run_case(const Case& c, const RunOptions& opt) {
     j["mean_velocity"] = {p.x * im, p.y * im, p.z * im};
   }
   j["threads"] = omp_get_max_threads();
+  j["screening"] = screen_avx2_enabled() ? "avx2" : "scalar";  // the force loop's list screening (results identical)
   j["peak_rss_bytes"] = std::max(peak_rss_setup, peak_rss_bytes());  // whole process
   j["peak_rss_run_bytes"] = peak_rss_bytes();  // from the start of the time loop
   j["run_bytes_per_particle"] = s.particles.size() ? peak_rss_bytes() / double(s.particles.size()) : 0.0;

@@ -37,13 +37,9 @@
 
 #include "models/model_impl.hpp"
 #include "sim/force_context.hpp"
+#include "sim/screen.hpp"
 
 namespace cohdem {
-
-/// List entries screened together before their touching ones are evaluated in one loop
-/// (chute: about 70 contacts per batch; 128 entries ran about as fast as the old per-row
-/// loop, 512 entries 6-11 % faster on the three peer problems).
-inline constexpr uint32_t kBatch = 512;
 
 /// Prefetches the cache lines of the record *p (for writing when kWrite): its first and its
 /// last byte, which lie on different lines whenever the record straddles a boundary.
@@ -51,16 +47,6 @@ template <int kWrite, class T>
 COHDEM_INLINE void prefetch_record(const T* p) {
   __builtin_prefetch(p, kWrite, 3);
   if constexpr (sizeof(T) > 8) __builtin_prefetch(reinterpret_cast<const char*>(p) + sizeof(T) - 1, kWrite, 3);
-}
-
-/// Two doubles in one vector register (SSE2 on x86-64, NEON on AArch64), for the x and y
-/// components of a Vec3 in the screening.
-typedef double V2 __attribute__((vector_size(16)));
-static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "load_xy reads x and y as one 16-byte block");
-COHDEM_INLINE V2 load_xy(const Vec3& v) {
-  V2 r;
-  std::memcpy(&r, &v.x, sizeof r);
-  return r;
 }
 
 /// Appends particles [q0, q1) to a thread's list of particles left for after the barrier;
@@ -84,6 +70,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t* const __restrict rpair = nl.rpair.data();
   const uint32_t* const __restrict wstart = nl.wstart.data();
   const Vec3* const __restrict shift = nl.shift.data();
+  // The screening reads whole groups of four entries up to the list's end (screen.hpp).
+  const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
+  const bool simd = screen_avx2_enabled();
   // Velocities written only by the closing half-kick (ForceContext::kick_h), positions only
   // by the fused opening of the next step (ForceContext::open_dt), after every pair of the
   // particle has been evaluated.
@@ -159,7 +148,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   bool timed = false;  // the region's threads timed their sweeps
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
-                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat)
+                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat, entries, simd)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
@@ -180,45 +169,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // entry is, and are added to in list order.
     auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
                                      const long a, const long b) __attribute__((always_inline)) {
-      uint32_t hk[kBatch];  // plain arrays: no zero fill
-      uint32_t hrow[kBatch];
-      double hd[kBatch][4];
-      uint32_t nh = 0;
-      for (long i = i0; i <= i1 && i < b; ++i) {
-        const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
-        if (start[i] >= kb) {
-          force[i] = Vec3{};
-          torque[i] = Vec3{};
-        }
-        const V2 xi_xy = load_xy(x[i]);
-        const double xi_z = x[i].z;
-        const double ri = radius[i];
-        for (uint32_t k = k0; k < k1; ++k) {
-          const uint32_t j = jdx[k];
-          // Most entries see j in place (kNoShift, a shift of +0): adding it could change only
-          // the sign of a zero coordinate, so skipping it changes no result and saves three
-          // loads and three additions per entry.
-          const uint8_t im = image[k];
-          V2 xj_xy = load_xy(x[j]);
-          double xj_z = x[j].z;
-          if (im != kNoShift) {
-            xj_xy += load_xy(shift[im]);
-            xj_z += shift[im].z;
-          }
-          // x and y in one register: the same operations, in the same order, as on a Vec3.
-          const V2 d_xy = xi_xy - xj_xy;
-          const double dz = xi_z - xj_z;
-          const V2 sq = d_xy * d_xy;
-          const double rsum = ri + radius[j];
-          const double d2 = (sq[0] + sq[1]) + dz * dz;
-          hk[nh] = k;
-          hrow[nh] = uint32_t(i);
-          std::memcpy(&hd[nh][0], &d_xy, sizeof d_xy);
-          hd[nh][2] = dz;
-          hd[nh][3] = d2;
-          nh += uint32_t((d2 < rsum * rsum) | (live[k] != 0));
-        }
-      }
+      ScreenHits hits;  // no zero fill
+      const ScreenInput sin{start, jdx, image, live, shift, x, radius, force, torque, entries};
+      const uint32_t nh =
+          simd ? screen_avx2(sin, i0, i1, b, kb, ke, hits) : screen_scalar(sin, i0, i1, b, kb, ke, hits);
+      const uint32_t* const hk = hits.k;
+      const uint32_t* const hrow = hits.row;
       // The touching entries' history and partners' reverse sums, velocities and spins are
       // far apart in memory (j runs over the neighbouring cells; touching entries are one in
       // five or seven, too sparse for the hardware prefetcher): they are asked for D contacts
@@ -245,9 +201,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const uint32_t k = hk[h], j = jdx[k], i = hrow[h];
         const double ri = radius[i], rj = radius[j];
         const double rsum = ri + rj;
-        const double dist = std::sqrt(hd[h][3]);
+        const double dist = std::sqrt(hits.d2[h]);
         PairGeom g;
-        g.n = Vec3{hd[h][0], hd[h][1], hd[h][2]} * (1.0 / dist);  // one division, not three
+        g.n = Vec3{hits.dx[h], hits.dy[h], hits.dz[h]} * (1.0 / dist);  // one division, not three
         g.delta = rsum - dist;
         g.ri = ri;
         g.rj = rj;

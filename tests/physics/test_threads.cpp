@@ -10,6 +10,7 @@
 #include "fixture.hpp"
 #include "io/checkpoint.hpp"
 #include "sim/force_kernel.hpp"
+#include "sim/screen.hpp"
 
 using namespace cohdem;
 using namespace cohdem::testing;
@@ -122,6 +123,31 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStates) {
   EXPECT_EQ(a.builds, b.builds);
   std::printf("[info] threads test: %zu contact-steps, %llu builds\n", a.contacts, (unsigned long long)a.builds);
   report("threads 1 vs 2: particles with any differing bit (300, 400 steps)", double(differ), 0.0, 0, "==");
+}
+
+// The AVX2 screening (four list entries at a time) and the scalar one pick the same entries
+// with the same pair vectors (tests/unit/test_screen.cpp checks them entry by entry): the
+// whole run, on one and on two threads, must not see which one ran.
+TEST(Threads, ScalarAndAvx2ScreeningGiveIdenticalStates) {
+  if (!screen_avx2_enabled()) GTEST_SKIP() << "no AVX2 screening here (CPU, build or COHDEM_SIMD=0)";
+  set_screen_avx2(false);
+  const State a = run(1), c = run(2);
+  set_screen_avx2(true);
+  const State b = run(1), d = run(2);
+  omp_set_num_threads(1);
+  ASSERT_EQ(a.id, b.id);
+  ASSERT_EQ(c.id, d.id);
+  EXPECT_GT(a.contacts, 10000u);
+  size_t differ = 0;
+  for (size_t i = 0; i < a.x.size(); ++i) {
+    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+    differ += !(c.x[i] == d.x[i] && c.v[i] == d.v[i] && c.w[i] == d.w[i]);
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_TRUE(a.wall_force == b.wall_force);
+  EXPECT_EQ(a.builds, b.builds);
+  report("scalar vs AVX2 screening: particles with any differing bit (300, 400 steps, 1 and 2 threads)", double(differ),
+         0.0, 0, "==");
 }
 
 TEST(Threads, ThreeThreadsAndRecordedContactsGiveIdenticalStates) {
