@@ -3,7 +3,8 @@
 //
 // Two implementations give the same output bit for bit: `screen_scalar` (inline in the
 // kernel, any CPU) and `screen_avx2` (x86-64 with AVX2, chosen at run time by
-// `screen_avx2_enabled`), which screens four entries of a row at a time. Both compute, per
+// `screen_avx2_enabled`), which screens four consecutive entries at a time (of one row or
+// of several). Both compute, per
 // entry, x_j (+ its periodic shift when the entry has one), d = x_i - x_j, d2 = (dx dx + dy
 // dy) + dz dz and rsum = r_i + r_j, in that order and without fused multiply-adds, and pick
 // the entry when d2 < rsum^2 or it is live; the picked entries are listed in ascending order.
@@ -107,8 +108,8 @@ COHDEM_INLINE uint32_t screen_scalar(const ScreenInput& s, const long i0, const 
   return nh;
 }
 
-/// The same as screen_scalar, four entries at a time in AVX2 registers (x86-64 only; call it
-/// only when screen_avx2_enabled()).
+/// The same as screen_scalar, four consecutive entries at a time in AVX2 registers (x86-64
+/// only; call it only when screen_avx2_enabled()).
 uint32_t screen_avx2(const ScreenInput& s, long i0, long i1, long b, uint32_t kb, uint32_t ke, ScreenHits& h);
 
 /// Whether the force loops screen with AVX2: the CPU has it, the build is for x86-64, and

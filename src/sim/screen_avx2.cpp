@@ -1,5 +1,6 @@
-// The force loop's screening in AVX2 registers (see screen.hpp): four entries of a row at a
-// time, the picked ones left-packed into ScreenHits with one permutation per array. The
+// The force loop's screening in AVX2 registers (see screen.hpp): the batch's entries four at
+// a time across rows (each lane reads its own row's particle, so short rows leave no lane
+// idle), the picked ones left-packed into ScreenHits with one permutation per array. The
 // function is compiled for AVX2 alone (no FMA: a fused multiply-add would round d2
 // differently from the scalar screening) and called only when the CPU has it.
 #include "sim/screen.hpp"
@@ -48,6 +49,23 @@ constexpr PackTable kPack = make_pack_table();
 __attribute__((target("avx2"), always_inline)) inline void put_packed(double* dst, const __m256d v, const __m256i p) {
   _mm256_storeu_pd(dst, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), p)));
 }
+
+/// x, y, z and r of four particles (of indices j0..j3), one lane each.
+struct Lanes { __m256d x, y, z, r; };
+__attribute__((target("avx2"), always_inline)) inline Lanes load_lanes(const Vec3* __restrict x,
+                                                                       const double* __restrict radius, const uint32_t j0,
+                                                                       const uint32_t j1, const uint32_t j2, const uint32_t j3) {
+  const __m256d t0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&x[j0].x)), _mm_loadu_pd(&x[j2].x), 1);
+  const __m256d t1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&x[j1].x)), _mm_loadu_pd(&x[j3].x), 1);
+  Lanes L;
+  L.x = _mm256_unpacklo_pd(t0, t1);
+  L.y = _mm256_unpackhi_pd(t0, t1);
+  L.z = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&x[j0].z), &x[j1].z)),
+                             _mm_loadh_pd(_mm_load_sd(&x[j2].z), &x[j3].z), 1);
+  L.r = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&radius[j0]), &radius[j1])),
+                             _mm_loadh_pd(_mm_load_sd(&radius[j2]), &radius[j3]), 1);
+  return L;
+}
 #endif
 
 }  // namespace
@@ -91,74 +109,67 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   Vec3* const __restrict force = s.force;
   Vec3* const __restrict torque = s.torque;
   constexpr uint32_t kAllInPlace = 0x01010101u * kNoShift;
-  // Groups of four start below `full`: their four entries lie in the list.
-  const uint32_t full = s.entries >= 4 ? s.entries - 3 : 0;
-  const __m128i four = _mm_set1_epi32(4);
-  const __m128i zero8 = _mm_setzero_si128();
-  uint32_t nh = 0;
+  // Each entry's row, for entries kb.. (four at a time; a row's last store runs into the
+  // next row's slots, which that row then writes).
+  uint32_t erow[kBatch + 4];
   for (long i = i0; i <= i1 && i < b; ++i) {
-    const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
     if (start[i] >= kb) {
       force[i] = Vec3{};
       torque[i] = Vec3{};
     }
-    const __m256d xi = _mm256_set1_pd(x[i].x), yi = _mm256_set1_pd(x[i].y), zi = _mm256_set1_pd(x[i].z);
-    const double ri = radius[i];
-    const __m256d riv = _mm256_set1_pd(ri);
-    const __m128i rowv = _mm_set1_epi32(int32_t(i));
-    __m128i kv = _mm_add_epi32(_mm_set1_epi32(int32_t(k0)), _mm_setr_epi32(0, 1, 2, 3));  // the lanes' entries
-    const __m128i k1v = _mm_set1_epi32(int32_t(k1));  // signed compare: the list is shorter than 2^31 entries
-    uint32_t k = k0;
-    // Lanes past the row's end are read (entries of the next rows, valid partners) and not
-    // picked; the list's last three entries go one at a time.
-    const uint32_t kg = std::min(k1, full);
-    for (; k < kg; k += 4) {
-      const uint32_t j0 = jdx[k], j1 = jdx[k + 1], j2 = jdx[k + 2], j3 = jdx[k + 3];
-      // x and y of the four partners: (x0 y0 x2 y2), (x1 y1 x3 y3) -> (x0 x1 x2 x3), (y0 ..).
-      const __m256d t0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&x[j0].x)), _mm_loadu_pd(&x[j2].x), 1);
-      const __m256d t1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&x[j1].x)), _mm_loadu_pd(&x[j3].x), 1);
-      __m256d X = _mm256_unpacklo_pd(t0, t1), Y = _mm256_unpackhi_pd(t0, t1);
-      __m256d Z = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&x[j0].z), &x[j1].z)),
-                                       _mm_loadh_pd(_mm_load_sd(&x[j2].z), &x[j3].z), 1);
-      const __m256d R = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&radius[j0]), &radius[j1])),
-                                             _mm_loadh_pd(_mm_load_sd(&radius[j2]), &radius[j3]), 1);
-      uint32_t im4;
-      std::memcpy(&im4, image + k, sizeof im4);
-      if (im4 != kAllInPlace) [[unlikely]] {
-        __m256d xyz[3] = {X, Y, Z};  // a copy: X, Y and Z stay in registers on the common path
-        shift_lanes(s, k, xyz);
-        X = xyz[0];
-        Y = xyz[1];
-        Z = xyz[2];
-      }
-      const __m256d dx = _mm256_sub_pd(xi, X), dy = _mm256_sub_pd(yi, Y), dz = _mm256_sub_pd(zi, Z);
-      const __m256d d2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-      const __m256d rs = _mm256_add_pd(riv, R);
-      uint32_t m = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_LT_OQ)));
-      uint32_t lv4;
-      std::memcpy(&lv4, live + k, sizeof lv4);
-      m |= ~uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_cvtsi32_si128(int32_t(lv4)), zero8)));
-      m &= uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(k1v, kv))));  // lanes of the row
-      // Left-pack the picked lanes: all four lanes are written, nh advances by the picked.
-      const __m256i pd = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.dbl[m]));
-      // hp: &h, hidden from the optimiser in each group, so that it addresses the six arrays
-      // as hp + constant + nh (one register) instead of keeping six pointers on the stack.
-      ScreenHits* hp = &h;
-      asm("" : "+r"(hp));
-      put_packed(hp->dx + nh, dx, pd);
-      put_packed(hp->dy + nh, dy, pd);
-      put_packed(hp->dz + nh, dz, pd);
-      put_packed(hp->d2 + nh, d2, pd);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(hp->k + nh),
-                       _mm_shuffle_epi8(kv, _mm_load_si128(reinterpret_cast<const __m128i*>(kPack.u32[m]))));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(hp->row + nh), rowv);
-      kv = _mm_add_epi32(kv, four);
-      nh += uint32_t(__builtin_popcount(m));
+    const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
+    const __m128i rv = _mm_set1_epi32(int32_t(i));
+    for (uint32_t k = k0; k < k1; k += 4) _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + (k - kb)), rv);
+  }
+  // The lanes past the batch's end read a valid row (and are not picked).
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + (ke - kb)), _mm_set1_epi32(int32_t(i0)));
+  const uint32_t full = s.entries >= 4 ? s.entries - 3 : 0;
+  const uint32_t kg = std::min(ke, full);
+  __m128i kv = _mm_add_epi32(_mm_set1_epi32(int32_t(kb)), _mm_setr_epi32(0, 1, 2, 3));
+  const __m128i kev = _mm_set1_epi32(int32_t(ke));
+  const __m128i four = _mm_set1_epi32(4);
+  const __m128i zero8 = _mm_setzero_si128();
+  uint32_t nh = 0;
+  uint32_t k = kb;
+  for (; k < kg; k += 4) {
+    const uint32_t* const er = erow + (k - kb);
+    const Lanes I = load_lanes(x, radius, er[0], er[1], er[2], er[3]);
+    Lanes J = load_lanes(x, radius, jdx[k], jdx[k + 1], jdx[k + 2], jdx[k + 3]);
+    uint32_t im4;
+    std::memcpy(&im4, image + k, sizeof im4);
+    if (im4 != kAllInPlace) [[unlikely]] {
+      __m256d xyz[3] = {J.x, J.y, J.z};
+      shift_lanes(s, k, xyz);
+      J.x = xyz[0];
+      J.y = xyz[1];
+      J.z = xyz[2];
     }
-    if (k < k1) [[unlikely]] {
-      const V2 xi_xy = load_xy(x[i]);
-      for (; k < k1; ++k) nh += screen_entry(s, xi_xy, x[i].z, ri, uint32_t(i), k, nh, h);
-    }
+    const __m256d dx = _mm256_sub_pd(I.x, J.x), dy = _mm256_sub_pd(I.y, J.y), dz = _mm256_sub_pd(I.z, J.z);
+    const __m256d d2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+    const __m256d rs = _mm256_add_pd(I.r, J.r);
+    uint32_t m = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_LT_OQ)));
+    uint32_t lv4;
+    std::memcpy(&lv4, live + k, sizeof lv4);
+    m |= ~uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_cvtsi32_si128(int32_t(lv4)), zero8)));
+    // Lanes inside the batch (a signed compare: lists are shorter than 2^31 entries).
+    m &= uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(kev, kv))));
+    const __m256i pd = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.dbl[m]));
+    const __m128i pu = _mm_load_si128(reinterpret_cast<const __m128i*>(kPack.u32[m]));
+    ScreenHits* hp = &h;
+    asm("" : "+r"(hp));
+    put_packed(hp->dx + nh, dx, pd);
+    put_packed(hp->dy + nh, dy, pd);
+    put_packed(hp->dz + nh, dz, pd);
+    put_packed(hp->d2 + nh, d2, pd);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(hp->k + nh), _mm_shuffle_epi8(kv, pu));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(hp->row + nh),
+                     _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(er)), pu));
+    kv = _mm_add_epi32(kv, four);
+    nh += uint32_t(__builtin_popcount(m));
+  }
+  for (; k < ke; ++k) {  // the list's last entries
+    const uint32_t i = erow[k - kb];
+    nh += screen_entry(s, load_xy(x[i]), x[i].z, radius[i], i, k, nh, h);
   }
   return nh;
 }
