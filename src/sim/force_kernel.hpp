@@ -2,7 +2,8 @@
 // kBatch).
 //
 // Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
-//   free screening, a batch of kBatch entries of consecutive rows at a time), then evaluated
+//   free screening, a batch of kBatch entries of consecutive rows at a time; scalar, or four
+//   entries at a time in AVX2 registers where the CPU has them: sim/screen.hpp), then evaluated
 //   (one loop over the batch's contacts); the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
 //   and the torque on j) goes to per-pair buffers (one thread: only when asked for,
@@ -170,9 +171,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
                                      const long a, const long b) __attribute__((always_inline)) {
       ScreenHits hits;  // no zero fill
-      const ScreenInput sin{start, jdx, image, live, shift, x, radius, force, torque, entries};
+      const ScreenInput scr{start, jdx, image, live, shift, x, radius, force, torque, entries};
       const uint32_t nh =
-          simd ? screen_avx2(sin, i0, i1, b, kb, ke, hits) : screen_scalar(sin, i0, i1, b, kb, ke, hits);
+          simd ? screen_avx2(scr, i0, i1, b, kb, ke, hits) : screen_scalar(scr, i0, i1, b, kb, ke, hits);
       const uint32_t* const hk = hits.k;
       const uint32_t* const hrow = hits.row;
       // The touching entries' history and partners' reverse sums, velocities and spins are

@@ -115,7 +115,7 @@ uint32_t screen_avx2(const ScreenInput& s, long i0, long i1, long b, uint32_t kb
 /// Whether the force loops screen with AVX2: the CPU has it, the build is for x86-64, and
 /// the environment does not say COHDEM_SIMD=0 (for comparisons; read once).
 bool screen_avx2_enabled();
-/// Overrides the choice (tests: both paths on one machine). Not thread-safe; call between runs.
+/// Overrides the choice (tests: both paths on one machine); call it between runs, not during one.
 void set_screen_avx2(bool on);
 
 }  // namespace cohdem

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 
@@ -18,7 +19,7 @@ namespace cohdem {
 
 namespace {
 
-int g_avx2 = -1;  // -1: not decided yet
+std::atomic<int> g_avx2{-1};  // -1: not decided yet (read by every force call)
 
 #if defined(__x86_64__)
 /// For each 4-bit mask of picked lanes, the lanes in ascending order, then lane 0 again:
