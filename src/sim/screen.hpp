@@ -4,10 +4,10 @@
 // Two implementations give the same output bit for bit: `screen_scalar` (inline in the
 // kernel, any CPU) and `screen_avx2` (x86-64 with AVX2, chosen at run time by
 // `screen_avx2_enabled`), which screens four consecutive entries at a time (of one row or
-// of several). Both compute, per
-// entry, x_j (+ its periodic shift when the entry has one), d = x_i - x_j, d2 = (dx dx + dy
-// dy) + dz dz and rsum = r_i + r_j, in that order and without fused multiply-adds, and pick
-// the entry when d2 < rsum^2 or it is live; the picked entries are listed in ascending order.
+// of several). Both compute, per entry, x_j (+ its periodic shift when the entry has one),
+// d = x_i - x_j, d2 = (dx dx + dy dy) + dz dz and rsum = r_i + r_j, in that order and
+// without fused multiply-adds, and pick the entry when d2 < rsum^2 or it is live; the
+// picked entries are listed in ascending order.
 #pragma once
 #include <algorithm>
 #include <cstddef>
