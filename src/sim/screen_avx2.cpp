@@ -114,10 +114,7 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   // next row's slots, which that row then writes).
   uint32_t erow[kBatch + 4];
   for (long i = i0; i <= i1 && i < b; ++i) {
-    if (start[i] >= kb) {
-      force[i] = Vec3{};
-      torque[i] = Vec3{};
-    }
+    start_row(start, force, torque, i, kb);
     const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
     const __m128i rv = _mm_set1_epi32(int32_t(i));
     for (uint32_t k = k0; k < k1; k += 4) _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + (k - kb)), rv);
