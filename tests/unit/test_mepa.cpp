@@ -497,3 +497,94 @@ TEST(MepaSystem, ImpactThroughForceKernel) {
     }
   }
 }
+
+// Fixed stiffnesses (MEPA; Luding with phi_f = 0; EEPA with a given k1) take a per-pair
+// constant 1 - k1/k2 and skip the per-contact stiffness reading; the general path (Luding's
+// growing k2, EEPA's Hertz k1) is tested above against closed forms. The two must agree to
+// the bit on the same path: the fast path is the same arithmetic, done once. The path loads,
+// unloads through f2 into the adhesive branch, reloads past the old maximum and ends.
+TEST(MepaFixedStiffness, FastPathIsTheGeneralPathBitForBit) {
+  const PairMaterial mat = PairMaterial::make(1e9, 0.3, 1e9, 0.3, false);
+  struct Set { const char* what; HystereticNormal::Params p; };
+  std::vector<Set> sets;
+  for (double n : {1.0, 1.5, 1.3})
+    for (double shift : {0.0, 1.0})
+      for (double off : {0.0, 1.0}) {
+        const auto ps = pset({{"k1", 2e6}, {"k2", 1e7}, {"kadh", 3e5}, {"n", n}, {"dp_shift", shift},
+                              {"coulomb_offset", off}});
+        sets.push_back({"mepa", MepaNormal::make(ps, mat)});
+      }
+  sets.push_back({"luding", LudingNormal::make(pset({{"k1", 2e5}, {"k2", 1e6}, {"kc", 1e4}}), mat)});
+  sets.push_back({"eepa", EepaNormal::make(pset({{"k1", 2e6}, {"lambda_p", 0.7}, {"kadh", 1e5}, {"x", 1.2},
+                                                  {"f0", -0.01}}), mat)});
+  const double dpath[] = {1e-5, 4e-5, 8e-5, 6e-5, 3e-5, 1e-5, 5e-6, 2e-6, 4e-6, 9e-5, 1.2e-4, 7e-5, 0.0, 2e-5};
+  for (const Set& s : sets) {
+    ASSERT_TRUE(s.p.fixed) << s.what;
+    HystereticNormal::Params general = s.p;
+    general.fixed = false;
+    general.plastic = 0;  // not read by the general path: a wrong read shows up as Dp = 0
+    HystereticNormal::State fast_s, gen_s;
+    for (double d : dpath) {
+      PairGeom g;
+      g.delta = d;
+      g.rstar = 5e-4;
+      NormalOut a, b;
+      HystereticNormal::apply(s.p, g, fast_s, a);
+      HystereticNormal::apply(general, g, gen_s, b);
+      const std::string at = std::string(s.what) + " n " + std::to_string(s.p.n) + " shift " +
+                             std::to_string(s.p.shift) + " delta " + std::to_string(d);
+      ASSERT_EQ(a.alive, b.alive) << at;
+      if (!a.alive) {
+        fast_s = gen_s = {};
+        continue;
+      }
+      // EXPECT_EQ on doubles: bit-for-bit (the same operations on the same values).
+      EXPECT_EQ(a.f_el, b.f_el) << at;
+      EXPECT_EQ(a.kn, b.kn) << at;
+      EXPECT_EQ(a.k_load, b.k_load) << at;
+      EXPECT_EQ(a.f_adh, b.f_adh) << at;
+      EXPECT_EQ(fast_s.Dmax, gen_s.Dmax) << at;
+      EXPECT_EQ(fast_s.Dp, gen_s.Dp) << at;
+      EXPECT_EQ(fast_s.branch, gen_s.branch) << at;
+    }
+  }
+  // Luding with a growing k2 and EEPA with the Hertz k1 stay on the general path.
+  EXPECT_FALSE(LudingNormal::make(pset({{"k1", 2e5}, {"k2", 1e6}, {"phi_f", 0.05}}), mat).fixed);
+  EXPECT_FALSE(EepaNormal::make(pset({{"lambda_p", 0.7}}), mat).fixed);
+}
+
+// The tangential stiffness, read once per material pair (HystTangential::make), against its
+// definition (kt_form 0: kt_ratio n k1 delta^(n-1); 1: kt_ratio k1 delta^(n-1); 2: kt_ratio
+// k1, EEPA's Hertz k1 = 4/3 E* sqrt(R*); kt > 0: kt) for n = 1, 1.5 and 1.3. Tolerance 1e-15
+// relative: the definition is evaluated here in another order (a few roundings).
+TEST(MepaTangential, StiffnessReadingMatchesItsDefinition) {
+  const PairMaterial mat = PairMaterial::make(1e9, 0.3, 1e9, 0.3, false);
+  const double d = 3e-5, rstar = 5e-4, k1 = 2e6, ratio = 0.7;
+  for (double n : {1.0, 1.5, 1.3})
+    for (int form = 0; form < 3; ++form) {
+      const auto tp = HystTangential<MepaNormal>::make(
+          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt_ratio", ratio}}), mat);
+      const double want = form == 0 ? ratio * n * k1 * std::pow(d, n - 1)
+                                    : (form == 1 ? ratio * k1 * std::pow(d, n - 1) : ratio * k1);
+      PairGeom g;
+      g.delta = d;
+      g.rstar = rstar;
+      HystereticNormal::State s;
+      NormalOut no;
+      HystereticNormal::apply(tp.np, g, s, no);
+      EXPECT_NEAR(HystTangential<MepaNormal>::stiffness(tp, g, no), want, 1e-15 * want) << "n " << n << " form " << form;
+      const auto given = HystTangential<MepaNormal>::make(
+          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt", 1234.5}}), mat);
+      EXPECT_EQ(HystTangential<MepaNormal>::stiffness(given, g, no), 1234.5) << "kt given, n " << n;
+    }
+  // EEPA with the Hertz k1 (k1 = 0, n = 1.5): kt_form 2 is kt_ratio 4/3 E* sqrt(R*) per contact.
+  const auto tp = HystTangential<EepaNormal>::make(pset({{"lambda_p", 0.7}, {"mu", 0.5}, {"kt_form", 2.0}, {"kt_ratio", ratio}}), mat);
+  PairGeom g;
+  g.delta = d;
+  g.rstar = rstar;
+  HystereticNormal::State s;
+  NormalOut no;
+  HystereticNormal::apply(tp.np, g, s, no);
+  const double want = ratio * 4.0 / 3.0 * mat.Estar * std::sqrt(rstar);
+  EXPECT_NEAR(HystTangential<EepaNormal>::stiffness(tp, g, no), want, 1e-15 * want);
+}

@@ -83,6 +83,11 @@ struct HystereticNormal : NormalBase {
     double f0 = 0;        ///< constant pull-off offset, N (<= 0)
     double phi_f = 0;     ///< Luding plastic flow limit (0: constant k2)
     double Estar = 0;     ///< hertz_k1 only
+    /// 1 - k1/k2 where both are fixed per material pair (no hertz_k1, phi_f = 0; set by
+    /// fix_ratio()): the plastic overlap of a new maximum, Dp = D (1 - k1/k2), then needs no
+    /// division per contact (the same operations, done once).
+    double plastic = 0;
+    bool fixed = false;   ///< k1, k2 fixed per material pair (plastic is set)
     bool hertz_k1 = false, shift = false, offset = false, x_is_n = true;
   };
   struct State {
@@ -127,18 +132,20 @@ struct HystereticNormal : NormalBase {
     const double d = g.delta;
     o.alive = d > 0;
     if (!o.alive) return;
-    const Stiff k = stiff(p, g.rstar);
+    // Fixed stiffnesses (the usual MEPA case): k2_at is k2 and the ratio is a constant, so
+    // stiff() and k2_at() are skipped; values identical to the general path's.
+    const Stiff k = p.fixed ? Stiff{p.k1, p.k2, 0.0} : stiff(p, g.rstar);
     const double dn1 = pow_nm1(d, p.n);
     const double D = d * dn1;
     const double A = p.kadh * (p.x_is_n ? D : powe(d, p.x));  // adhesive bound magnitude
-    const double k2 = k2_at(k, s.Dmax);
+    const double k2 = p.fixed ? p.k2 : k2_at(k, s.Dmax);
     const double f1 = k.k1 * D, f2 = k2 * (D - s.Dp);
     // The branch (loading, un/reloading, adhesive) changes from step to step in a sheared bed
     // and mispredicts, so all three are computed and the result selected (same values as a
     // branch would give). Virgin loading: a new maximum (f2 >= f1 <=> D >= Dmax for k2 > k1).
     const bool load = f2 >= f1, adh = !load && !(f2 > -A);
     const double f = load ? f1 : (adh ? -A : f2);
-    const double Dp_new = D * (1.0 - k.k1 / k2_at(k, D));
+    const double Dp_new = D * (p.fixed ? p.plastic : 1.0 - k.k1 / k2_at(k, D));
     s.Dmax = load ? D : s.Dmax;
     s.Dp = load ? Dp_new : s.Dp;
     s.branch = load ? 1 : (adh ? 3 : 2);
@@ -159,6 +166,11 @@ struct HystereticNormal : NormalBase {
   }
 
  protected:
+  /// Sets Params::plastic and fixed where k1 and k2 do not depend on the contact.
+  static void fix_ratio(Params& p) {
+    p.fixed = !p.hertz_k1 && !(p.phi_f > 0);
+    p.plastic = p.fixed ? 1.0 - p.k1 / p.k2 : 0.0;
+  }
   static void check_k2(const ParamSet& ps, const char* key, double k1, double k2) {
     if (k2 < k1)
       throw param_error(ps, key, "unloading stiffness must be >= k1 (k1 = " + std::to_string(k1) + ", " + key +
@@ -185,6 +197,7 @@ struct MepaNormal : HystereticNormal {
     p.n = p.x = ps.get(specs[3]);
     p.shift = ps.get(specs[4]) != 0;
     p.offset = ps.get(specs[5]) != 0;
+    fix_ratio(p);
     return p;
   }
 };
@@ -210,6 +223,7 @@ struct LudingNormal : HystereticNormal {
     p.n = p.x = ps.get(specs[4]);
     p.shift = ps.get(specs[5]) != 0;
     p.offset = ps.get(specs[6]) != 0;
+    fix_ratio(p);
     return p;
   }
 };
@@ -245,6 +259,7 @@ struct EepaNormal : HystereticNormal {
     p.f0 = ps.get(specs[5]);
     p.shift = ps.get(specs[6]) != 0;
     p.offset = ps.get(specs[7]) != 0;
+    fix_ratio(p);
     return p;
   }
 };
@@ -262,6 +277,12 @@ struct HystTangential : TangentialCommon {
     typename N::Params np;
     double mu, kt, kt_ratio, damp_t;
     int form;
+    // The reading of kt_form and kt, resolved once per material pair (same values as
+    // resolving it per contact): kt_const, a fixed kt (kt given, or kt_form 2 with a fixed
+    // k1); kt_hertz, kt_ratio k1(R*) per contact (kt_form 2, EEPA's Hertz k1); otherwise
+    // kt_ratio k_load kt_mult, kt_mult n for the tangent (kt_form 0, n != 1), else 1.
+    double kt_c = 0, kt_mult = 1;
+    bool kt_const = false, kt_hertz = false;
   };
   static constexpr std::array specs = {
       kMuSpec,
@@ -270,16 +291,21 @@ struct HystTangential : TangentialCommon {
       opt("kt_ratio", "-", 1.0, 0, kInf, "kt / (k1-based stiffness) (EDEM tangential stiffness multiplier)"),
       opt("kt", "N/m", 0, 0, kInf, "absolute tangential stiffness (0: from k1 by kt_form)"), kDampTSpec};
   static Params make(const ParamSet& p, const PairMaterial& m) {
-    return {N::make(p, m), p.get(specs[0]), p.get(specs[3]), p.get(specs[2]), p.get(specs[4]),
-            get_choice(p, specs[1])};
+    Params q{N::make(p, m), p.get(specs[0]), p.get(specs[3]), p.get(specs[2]), p.get(specs[4]),
+             get_choice(p, specs[1])};
+    const double n = q.np.n;
+    // n = 1: every form is kt_ratio k1 (k_load = k1 delta^0 = k1 exactly).
+    q.kt_hertz = !(q.kt > 0) && q.form == 2 && q.np.hertz_k1;
+    q.kt_const = q.kt > 0 || (q.form == 2 && !q.np.hertz_k1);
+    q.kt_c = q.kt > 0 ? q.kt : q.kt_ratio * q.np.k1;
+    q.kt_mult = n != 1.0 && q.form == 0 ? n : 1.0;
+    return q;
   }
   /// no.k_load = k1 delta^(n-1), from the normal law's evaluation of this contact.
   COHDEM_INLINE static double stiffness(const Params& p, const PairGeom& g, const NormalOut& no) {
-    if (p.kt > 0) return p.kt;
-    const double n = p.np.n;
-    if (n == 1.0) return p.kt_ratio * no.k_load;  // k_load = k1
-    if (p.form == 2) return p.kt_ratio * N::k1_of(p.np, g.rstar);
-    return p.kt_ratio * no.k_load * (p.form == 0 ? n : 1.0);
+    if (p.kt_const) return p.kt_c;
+    if (p.kt_hertz) return p.kt_ratio * N::k1_of(p.np, g.rstar);
+    return p.kt_ratio * no.k_load * p.kt_mult;
   }
   COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut& no, double gamma_n,
                                   double fc, State& s) {
