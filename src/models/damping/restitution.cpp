@@ -1,5 +1,9 @@
 #include "models/damping/restitution.hpp"
 
+#include <map>
+#include <mutex>
+#include <tuple>
+
 namespace cohdem {
 
 double restitution_of_beta(double beta, double p, bool limit) {
@@ -39,8 +43,8 @@ double restitution_of_beta(double beta, double p, bool limit) {
   return 0.0;  // stuck (overdamped)
 }
 
-double beta_for_restitution(double e, double p, bool limit) {
-  if (e >= 1.0) return 0.0;
+namespace {
+double solve_beta(double e, double p, bool limit) {
   double lo = 0.0, hi = 1.0;
   while (restitution_of_beta(hi, p, limit) > e && hi < 1e3) hi *= 2;
   for (int it = 0; it < 60; ++it) {
@@ -49,6 +53,25 @@ double beta_for_restitution(double e, double p, bool limit) {
     if (hi - lo < 1e-10) break;
   }
   return 0.5 * (lo + hi);
+}
+}  // namespace
+
+double beta_for_restitution(double e, double p, bool limit) {
+  if (e >= 1.0) return 0.0;
+  // Each solve integrates some forty impacts (~0.05 s); a case asks for the same (e, p,
+  // limit) once per material pair and per model set-up, so solved values are kept for the
+  // process (the same function of the same arguments: identical results).
+  static std::mutex mutex;
+  static std::map<std::tuple<double, double, bool>, double> solved;
+  const auto key = std::make_tuple(e, p, limit);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = solved.find(key); it != solved.end()) return it->second;
+  }
+  const double beta = solve_beta(e, p, limit);
+  const std::lock_guard<std::mutex> lock(mutex);
+  solved.emplace(key, beta);
+  return beta;
 }
 
 }  // namespace cohdem
