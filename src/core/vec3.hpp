@@ -46,12 +46,6 @@ inline Vec3 normalized(const Vec3& a) {
   return l > 0 ? a / l : Vec3{};
 }
 
-/// Turns a history vector h (a contact's tangential force, rolling or bending moment) into
-/// the plane normal to the unit vector n, keeping its length: h -= n (n.h), then h *= (1 -
-/// x)^(-1/2) with x = (n.h)^2/|h|^2. For x < 1e-4 (the contact turned by less than 0.6
-/// degrees since the last step: always, in practice) the factor's series to x^3 is exact to
-/// double precision (the next term, 35/128 x^4, is below 3e-17) and saves a square root on
-/// the critical path of every contact; larger turns take the exact factor.
 /// Factor that brings a vector of squared length m2 back to length lim (>= 0) when it is
 /// longer (a Coulomb-type limit on a spring's force or moment): lim/sqrt(m2) above the limit,
 /// exactly 1 within it. Selected without a branch: whether a contact slides changes from
@@ -62,6 +56,12 @@ inline double limit_scale(double m2, double lim) {
   return over ? lim / std::sqrt(over ? m2 : 1.0) : 1.0;
 }
 
+/// Turns a history vector h (a contact's tangential force, rolling or bending moment) into
+/// the plane normal to the unit vector n, keeping its length: h -= n (n.h), then h *= (1 -
+/// x)^(-1/2) with x = (n.h)^2/|h|^2. For x < 1e-4 (the contact turned by less than 0.6
+/// degrees since the last step: always, in practice) the factor's series to x^3 is exact to
+/// double precision (the next term, 35/128 x^4, is below 3e-17) and saves a square root on
+/// the critical path of every contact; larger turns take the exact factor.
 COHDEM_INLINE void rotate_into_plane(Vec3& h, const Vec3& n) {
   const double m0 = norm2(h);
   if (!(m0 > 0)) return;
