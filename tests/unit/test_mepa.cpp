@@ -560,31 +560,31 @@ TEST(MepaFixedStiffness, FastPathIsTheGeneralPathBitForBit) {
 TEST(MepaTangential, StiffnessReadingMatchesItsDefinition) {
   const PairMaterial mat = PairMaterial::make(1e9, 0.3, 1e9, 0.3, false);
   const double d = 3e-5, rstar = 5e-4, k1 = 2e6, ratio = 0.7;
-  for (double n : {1.0, 1.5, 1.3})
-    for (int form = 0; form < 3; ++form) {
-      const auto tp = HystTangential<MepaNormal>::make(
-          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt_ratio", ratio}}), mat);
-      const double want = form == 0 ? ratio * n * k1 * std::pow(d, n - 1)
-                                    : (form == 1 ? ratio * k1 * std::pow(d, n - 1) : ratio * k1);
-      PairGeom g;
-      g.delta = d;
-      g.rstar = rstar;
-      HystereticNormal::State s;
-      NormalOut no;
-      HystereticNormal::apply(tp.np, g, s, no);
-      EXPECT_NEAR(HystTangential<MepaNormal>::stiffness(tp, g, no), want, 1e-15 * want) << "n " << n << " form " << form;
-      const auto given = HystTangential<MepaNormal>::make(
-          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt", 1234.5}}), mat);
-      EXPECT_EQ(HystTangential<MepaNormal>::stiffness(given, g, no), 1234.5) << "kt given, n " << n;
-    }
-  // EEPA with the Hertz k1 (k1 = 0, n = 1.5): kt_form 2 is kt_ratio 4/3 E* sqrt(R*) per contact.
-  const auto tp = HystTangential<EepaNormal>::make(pset({{"lambda_p", 0.7}, {"mu", 0.5}, {"kt_form", 2.0}, {"kt_ratio", ratio}}), mat);
   PairGeom g;
   g.delta = d;
   g.rstar = rstar;
-  HystereticNormal::State s;
-  NormalOut no;
-  HystereticNormal::apply(tp.np, g, s, no);
+  // The normal law's evaluation at delta = d (k_load), then the tangential stiffness.
+  auto kt_of = [&]<class T>(const typename T::Params& tp) {
+    HystereticNormal::State s;
+    NormalOut no;
+    HystereticNormal::apply(tp.np, g, s, no);
+    return T::stiffness(tp, g, no);
+  };
+  using MepaT = HystTangential<MepaNormal>;
+  using EepaT = HystTangential<EepaNormal>;
+  for (double n : {1.0, 1.5, 1.3})
+    for (int form = 0; form < 3; ++form) {
+      const auto tp = MepaT::make(
+          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt_ratio", ratio}}), mat);
+      const double want = form == 0 ? ratio * n * k1 * std::pow(d, n - 1)
+                                    : (form == 1 ? ratio * k1 * std::pow(d, n - 1) : ratio * k1);
+      EXPECT_NEAR(kt_of.operator()<MepaT>(tp), want, 1e-15 * want) << "n " << n << " form " << form;
+      const auto given = MepaT::make(
+          pset({{"k1", k1}, {"k2", 1e7}, {"n", n}, {"mu", 0.5}, {"kt_form", double(form)}, {"kt", 1234.5}}), mat);
+      EXPECT_EQ(kt_of.operator()<MepaT>(given), 1234.5) << "kt given, n " << n;
+    }
+  // EEPA with the Hertz k1 (k1 = 0, n = 1.5): kt_form 2 is kt_ratio 4/3 E* sqrt(R*) per contact.
+  const auto tp = EepaT::make(pset({{"lambda_p", 0.7}, {"mu", 0.5}, {"kt_form", 2.0}, {"kt_ratio", ratio}}), mat);
   const double want = ratio * 4.0 / 3.0 * mat.Estar * std::sqrt(rstar);
-  EXPECT_NEAR(HystTangential<EepaNormal>::stiffness(tp, g, no), want, 1e-15 * want);
+  EXPECT_NEAR(kt_of.operator()<EepaT>(tp), want, 1e-15 * want);
 }
