@@ -105,6 +105,7 @@ struct HystereticNormal : NormalBase {
   /// Stiffnesses of one contact (they depend on R* for hertz_k1 and Luding's phi_f).
   struct Stiff { double k1, k2, Dmax_p; };
   COHDEM_INLINE static Stiff stiff(const Params& p, double rstar) {
+    if (p.fixed) return {p.k1, p.k2, 0.0};  // the usual MEPA case: no per-contact reading
     Stiff k;
     k.k1 = p.hertz_k1 ? (4.0 / 3.0) * p.Estar * std::sqrt(rstar) : p.k1;
     k.k2 = p.hertz_k1 ? k.k1 / (1.0 - p.ratio) : p.k2;
@@ -132,19 +133,19 @@ struct HystereticNormal : NormalBase {
     const double d = g.delta;
     o.alive = d > 0;
     if (!o.alive) return;
-    // Fixed stiffnesses (the usual MEPA case): k2_at is k2 and the ratio is a constant, so
-    // stiff() and k2_at() are skipped; values identical to the general path's.
-    const Stiff k = p.fixed ? Stiff{p.k1, p.k2, 0.0} : stiff(p, g.rstar);
+    const Stiff k = stiff(p, g.rstar);
     const double dn1 = pow_nm1(d, p.n);
     const double D = d * dn1;
     const double A = p.kadh * (p.x_is_n ? D : powe(d, p.x));  // adhesive bound magnitude
-    const double k2 = p.fixed ? p.k2 : k2_at(k, s.Dmax);
+    // (k2_at gives k.k2 when fixed too; the select lets GCC drop its test: 8 instructions.)
+    const double k2 = p.fixed ? k.k2 : k2_at(k, s.Dmax);
     const double f1 = k.k1 * D, f2 = k2 * (D - s.Dp);
     // The branch (loading, un/reloading, adhesive) changes from step to step in a sheared bed
     // and mispredicts, so all three are computed and the result selected (same values as a
     // branch would give). Virgin loading: a new maximum (f2 >= f1 <=> D >= Dmax for k2 > k1).
     const bool load = f2 >= f1, adh = !load && !(f2 > -A);
     const double f = load ? f1 : (adh ? -A : f2);
+    // Fixed stiffnesses: 1 - k1/k2 is the per-pair constant (the same value, no division).
     const double Dp_new = D * (p.fixed ? p.plastic : 1.0 - k.k1 / k2_at(k, D));
     s.Dmax = load ? D : s.Dmax;
     s.Dp = load ? Dp_new : s.Dp;
@@ -275,8 +276,7 @@ template <class N>
 struct HystTangential : TangentialCommon {
   struct Params {
     typename N::Params np;
-    double mu, kt, kt_ratio, damp_t;
-    int form;
+    double mu, kt_ratio, damp_t;
     // The reading of kt_form and kt, resolved once per material pair (same values as
     // resolving it per contact): kt_const, a fixed kt (kt given, or kt_form 2 with a fixed
     // k1); kt_hertz, kt_ratio k1(R*) per contact (kt_form 2, EEPA's Hertz k1); otherwise
@@ -291,14 +291,14 @@ struct HystTangential : TangentialCommon {
       opt("kt_ratio", "-", 1.0, 0, kInf, "kt / (k1-based stiffness) (EDEM tangential stiffness multiplier)"),
       opt("kt", "N/m", 0, 0, kInf, "absolute tangential stiffness (0: from k1 by kt_form)"), kDampTSpec};
   static Params make(const ParamSet& p, const PairMaterial& m) {
-    Params q{N::make(p, m), p.get(specs[0]), p.get(specs[3]), p.get(specs[2]), p.get(specs[4]),
-             get_choice(p, specs[1])};
-    const double n = q.np.n;
+    Params q{N::make(p, m), p.get(specs[0]), p.get(specs[2]), p.get(specs[4])};
+    const double kt = p.get(specs[3]), n = q.np.n;
+    const int form = get_choice(p, specs[1]);
     // n = 1: every form is kt_ratio k1 (k_load = k1 delta^0 = k1 exactly).
-    q.kt_hertz = !(q.kt > 0) && q.form == 2 && q.np.hertz_k1;
-    q.kt_const = q.kt > 0 || (q.form == 2 && !q.np.hertz_k1);
-    q.kt_c = q.kt > 0 ? q.kt : q.kt_ratio * q.np.k1;
-    q.kt_mult = n != 1.0 && q.form == 0 ? n : 1.0;
+    q.kt_hertz = form == 2 && q.np.hertz_k1;  // read after kt_const (a given kt wins)
+    q.kt_const = kt > 0 || (form == 2 && !q.np.hertz_k1);
+    q.kt_c = kt > 0 ? kt : q.kt_ratio * q.np.k1;
+    q.kt_mult = n != 1.0 && form == 0 ? n : 1.0;
     return q;
   }
   /// no.k_load = k1 delta^(n-1), from the normal law's evaluation of this contact.
