@@ -38,6 +38,7 @@
 
 #include "models/model_impl.hpp"
 #include "sim/force_context.hpp"
+#include "sim/lanes.hpp"
 #include "sim/screen.hpp"
 
 namespace cohdem {
@@ -99,6 +100,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // after every contact's stores.
   const Params* const __restrict params = params_.data();
   const size_t nmat = size_t(n_);
+  // The lanes' reading of the material pairs' parameters (the linear law only; a few
+  // entries, built per call).
+  std::vector<LinearLaneParams> lane_table;
+  if constexpr (std::is_same_v<Law, LinearLaw>) {
+    static_assert(sizeof(State) == sizeof(Vec3), "the lanes read the linear law's history as its tangential force");
+    lane_table.reserve(params_.size());
+    for (const Params& q : params_) lane_table.push_back(linear_lane_params(q));
+  }
+  const LinearLaneParams* const lane_params = lane_table.data();
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;
@@ -149,7 +159,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   bool timed = false;  // the region's threads timed their sweeps
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
-                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat, entries, simd)
+                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat, entries, simd, \
+                                                  lane_params)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
@@ -194,6 +205,47 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       };
       constexpr uint32_t D = 8;
       for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
+      // One contact's result into the sums: the force and torque on i into i's row sum, j's
+      // share into its reverse sums or the per-pair buffer, in list order.
+      auto put = [&](const uint32_t k, const uint32_t i, const uint32_t j, const bool alive, const Vec3& f,
+                     const Vec3& ti, const Vec3& tj, const double ca) __attribute__((always_inline)) {
+        live[k] = alive;
+        if (alive) {
+          force[i] += f;
+          torque[i] += ti;
+          if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
+            rev[j].f -= f;
+            rev[j].tj += tj;
+            if (keep_pair) res[k] = {f, tj};
+          } else {
+            res[slot_of ? slot_of[k] : k] = {f, tj};  // gathered by j's thread after the barrier
+          }
+          if (a_pair) a_pair[k] = ca;
+        }
+      };
+      // The linear law without rolling or twisting: its contacts four at a time in AVX2
+      // lanes (sim/lanes.hpp; the same results bit for bit), kLaneChunk per call, whose
+      // results are then added one contact at a time in list order. The next chunk's records
+      // are asked for while one is evaluated.
+      if constexpr (std::is_same_v<Law, LinearLaw>) {
+        if (simd) {
+          const LaneInput lin{jdx, v, omega, radius, mass, flag, species, lane_params, nmat,
+                              reinterpret_cast<Vec3*>(hs), dt, want_a};
+          for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
+          LaneOut lo;
+          for (uint32_t h0 = 0; h0 < nh; h0 += kLaneChunk) {
+            const uint32_t cnt = std::min(kLaneChunk, nh - h0);
+            for (uint32_t h = h0 + kLaneChunk; h < std::min(nh, h0 + 2 * kLaneChunk); ++h) pf(h);
+            linear_lanes_avx2(lin, hits, h0, cnt, lo);
+            for (uint32_t q = 0; q < cnt; ++q) {
+              const uint32_t k = hk[h0 + q];
+              put(k, hrow[h0 + q], jdx[k], lo.alive[q] != 0, Vec3{lo.fx[q], lo.fy[q], lo.fz[q]},
+                  Vec3{lo.tix[q], lo.tiy[q], lo.tiz[q]}, Vec3{lo.tjx[q], lo.tjy[q], lo.tjz[q]}, lo.a[q]);
+            }
+          }
+          return;
+        }
+      }
       // Written in full by every evaluation that returns true (read only then): declared once,
       // so its 152-byte zero fill (a `rep stos`) is not repeated per contact.
       PairForce out;
@@ -226,19 +278,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         g.dt = dt;
         g.want_a = want_a;
         const bool alive = Law::evaluate(params[size_t(species[i]) * nmat + size_t(species[j])], g, hs[k], out);
-        live[k] = alive;
-        if (alive) {
-          force[i] += out.f;
-          torque[i] += out.ti;
-          if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
-            rev[j].f -= out.f;
-            rev[j].tj += out.tj;
-            if (keep_pair) res[k] = {out.f, out.tj};
-          } else {
-            res[slot_of ? slot_of[k] : k] = {out.f, out.tj};  // gathered by j's thread after the barrier
-          }
-          if (a_pair) a_pair[k] = out.a;
-        }
+        put(k, i, j, alive, out.f, out.ti, out.tj, out.a);
       }
     };
     // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i). kLocal: i is
