@@ -100,15 +100,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // after every contact's stores.
   const Params* const __restrict params = params_.data();
   const size_t nmat = size_t(n_);
-  // The lanes' reading of the material pairs' parameters (the linear law only; a few
-  // entries, built per call).
-  std::vector<LinearLaneParams> lane_table;
-  if constexpr (std::is_same_v<Law, LinearLaw>) {
-    static_assert(sizeof(State) == sizeof(Vec3), "the lanes read the linear law's history as its tangential force");
+  // The lanes' reading of the material pairs' parameters (laws with lanes only: sim/lanes.hpp;
+  // a few entries, built per call).
+  using Lanes = LaneLaw<Law>;
+  std::vector<typename Lanes::Params> lane_table;
+  if constexpr (Lanes::kHave) {
     lane_table.reserve(params_.size());
-    for (const Params& q : params_) lane_table.push_back(linear_lane_params(q));
+    for (const Params& q : params_) lane_table.push_back(lane_params(q));
   }
-  const LinearLaneParams* const lane_params = lane_table.data();
+  const void* const lane_p = lane_table.data();
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;
@@ -160,7 +160,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
                                                   keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat, entries, simd, \
-                                                  lane_params)
+                                                  lane_p)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
@@ -223,20 +223,19 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           if (a_pair) a_pair[k] = ca;
         }
       };
-      // The linear law without rolling or twisting: its contacts four at a time in AVX2
-      // lanes (sim/lanes.hpp; the same results bit for bit), kLaneChunk per call, whose
-      // results are then added one contact at a time in list order. The next chunk's records
-      // are asked for while one is evaluated.
-      if constexpr (std::is_same_v<Law, LinearLaw>) {
+      // Laws with lanes (sim/lanes.hpp: the linear law, Hertz-Mindlin with EPSD rolling):
+      // their contacts four at a time in AVX2 lanes (the same results bit for bit),
+      // kLaneChunk per call, whose results are then added one contact at a time in list
+      // order. The next chunk's records are asked for while one is evaluated.
+      if constexpr (Lanes::kHave) {
         if (simd) {
-          const LaneInput lin{jdx, v, omega, radius, mass, flag, species, lane_params, nmat,
-                              reinterpret_cast<Vec3*>(hs), dt, want_a};
+          const LaneInput lin{jdx, v, omega, radius, mass, inertia, flag, species, lane_p, nmat, hs, dt, want_a};
           for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
           LaneOut lo;
           for (uint32_t h0 = 0; h0 < nh; h0 += kLaneChunk) {
             const uint32_t cnt = std::min(kLaneChunk, nh - h0);
             for (uint32_t h = h0 + kLaneChunk; h < std::min(nh, h0 + 2 * kLaneChunk); ++h) pf(h);
-            linear_lanes_avx2(lin, hits, h0, cnt, lo);
+            Lanes::eval(lin, hits, h0, cnt, lo);
             for (uint32_t q = 0; q < cnt; ++q) {
               const uint32_t k = hk[h0 + q];
               put(k, hrow[h0 + q], jdx[k], lo.alive[q] != 0, Vec3{lo.fx[q], lo.fy[q], lo.fz[q]},

@@ -1,21 +1,26 @@
 // Contacts evaluated four at a time, one per lane of an AVX2 register ("lanes of contacts"),
-// for the linear law without rolling or twisting resistance (the law of LAMMPS's chute
-// benchmark and of the poured packing). The force loop (sim/force_kernel.hpp) screens a batch
-// of list entries as before; the touching ones are then evaluated here in groups of four, and
-// the loop adds their results to the particles' sums one contact at a time, in list order.
+// for the two laws of the peer benchmarks: the linear law without rolling or twisting
+// resistance (LAMMPS's chute, the poured packing) and Hertz-Mindlin with EPSD rolling
+// resistance (the chute's `granular hmr` variant). The force loop (sim/force_kernel.hpp)
+// screens a batch of list entries as before; the touching ones are then evaluated here in
+// groups of four, and the loop adds their results to the particles' sums one contact at a
+// time, in list order.
 //
-// The lanes do the operations of ContactLaw<LinearNormal, LinearRestitutionDamping,
-// LinearTangential, NoRolling, NoTwisting>::evaluate and of the kernel's geometry, in the same
-// order, without fused multiply-adds, with every branch of the scalar code turned into a
-// select of the value the scalar code would have taken: the results are the scalar path's bit
-// for bit (tests/unit/test_lanes.cpp; `COHDEM_SIMD=0` selects the scalar path at run time).
+// The lanes do the operations of the law's ContactLaw::evaluate and of the kernel's geometry,
+// in the same order, without fused multiply-adds, with every branch of the scalar code turned
+// into a select of the value the scalar code would have taken: the results are the scalar
+// path's bit for bit (tests/physics/test_lanes.cpp; `COHDEM_SIMD=0` in the environment
+// selects the scalar path at run time). Other laws run the scalar path.
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <bit>
+#include <type_traits>
 
 #include "core/vec3.hpp"
 #include "models/contact_law.hpp"
 #include "models/damping/restitution.hpp"
+#include "models/normal/hertz.hpp"
 #include "models/normal/linear.hpp"
 #include "models/rolling/rolling.hpp"
 #include "models/tangential/spring.hpp"
@@ -25,6 +30,7 @@
 namespace cohdem {
 
 using LinearLaw = ContactLaw<LinearNormal, LinearRestitutionDamping, LinearTangential, NoRolling, NoTwisting>;
+using HertzEpsdLaw = ContactLaw<HertzNormal, TsujiDamping, MindlinTangential, EpsdRolling, NoTwisting>;
 
 /// A material pair's parameters of the linear law, as the lanes read them: each a value the
 /// scalar law computes from its Params in the same way (2 beta, the resolved kt), so that the
@@ -37,21 +43,38 @@ struct LinearLaneParams {
   double kt;        ///< kt > 0 ? kt : kt_ratio * kn
   double damp_t;
 };
-LinearLaneParams linear_lane_params(const LinearLaw::Params& p);
+LinearLaneParams lane_params(const LinearLaw::Params& p);
+
+/// The same for Hertz-Mindlin with EPSD rolling resistance.
+struct HertzEpsdLaneParams {
+  double two_Estar;  ///< 2.0 * E* (kn = 2 E* a)
+  double two_beta, limit, mu;
+  double eight_Gstar;  ///< 8.0 * G* (kt = 8 G* a)
+  double damp_kt;      ///< damp_t sqrt(4 G*/E*)
+  double mu_r, eta_r;
+};
+HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p);
+
+/// The laws' histories as the lanes read them (static_asserts in the force loop check the
+/// layouts against ContactLaw::State).
+struct LinearLaneHistory { Vec3 fs; };
+struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
-/// parameters (nmat x nmat, row = species of i) and the contacts' histories (list entry k).
+/// parameters (nmat x nmat, row = species of i, of the law's lane-parameter type) and the
+/// contacts' histories (by list entry, of the law's lane-history type).
 struct LaneInput {
   const uint32_t* jdx;
   const Vec3* v;
   const Vec3* omega;
   const double* radius;
   const double* mass;
+  const double* inertia;
   const uint8_t* flag;
   const int32_t* species;
-  const LinearLaneParams* params;
+  const void* params;
   size_t nmat;
-  Vec3* fs;  ///< LinearLaw's history (its State is the tangential spring's force), by list entry
+  void* hist;
   double dt;
   bool want_a;
 };
@@ -67,8 +90,45 @@ struct LaneOut {
   uint8_t alive[kLaneChunk];
 };
 
-/// Evaluates the picked entries [h0, h0 + cnt) of a screened batch (cnt <= kLaneChunk) and
-/// updates their histories. AVX2 only: call when screen_avx2_enabled().
+/// Evaluate the picked entries [h0, h0 + cnt) of a screened batch (cnt <= kLaneChunk) and
+/// update their histories. AVX2 only: call when screen_avx2_enabled().
 void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+
+/// Which laws have lanes, with their lane parameters, history and evaluation.
+template <class Law>
+struct LaneLaw {
+  static constexpr bool kHave = false;
+  using Params = char;
+  using History = char;
+};
+template <>
+struct LaneLaw<LinearLaw> {
+  static constexpr bool kHave = true;
+  using Params = LinearLaneParams;
+  using History = LinearLaneHistory;
+  static constexpr auto eval = linear_lanes_avx2;
+};
+template <>
+struct LaneLaw<HertzEpsdLaw> {
+  static constexpr bool kHave = true;
+  using Params = HertzEpsdLaneParams;
+  using History = HertzEpsdLaneHistory;
+  static constexpr auto eval = hertz_epsd_lanes_avx2;
+};
+
+/// The lane histories are the laws' State, byte for byte.
+constexpr bool lane_history_layouts() {
+  LinearLaw::State a{};
+  a.tangential.fs = {1, 2, 3};
+  const auto la = std::bit_cast<LinearLaneHistory>(a);
+  HertzEpsdLaw::State b{};
+  b.tangential.fs = {1, 2, 3};
+  b.tangential.kt_prev = 4;
+  b.rolling.mk = {5, 6, 7};
+  const auto lb = std::bit_cast<HertzEpsdLaneHistory>(b);
+  return la.fs == Vec3{1, 2, 3} && lb.fs == Vec3{1, 2, 3} && lb.kt_prev == 4 && lb.mk == Vec3{5, 6, 7};
+}
+static_assert(lane_history_layouts(), "the lanes' histories must be the laws' State, byte for byte");
 
 }  // namespace cohdem

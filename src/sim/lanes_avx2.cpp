@@ -1,8 +1,8 @@
-// The linear law's contacts four at a time in AVX2 registers (see lanes.hpp). Written with
-// GCC's vector extensions (the operators act lane by lane, as the scalar code's do on one
-// contact) in functions compiled for AVX2 alone: no fused multiply-adds, which would round
-// differently from the scalar law. Each scalar branch becomes a select between the values
-// both sides compute; lanes past the chunk's end repeat its last contact and are not stored.
+// The lanes of contacts in AVX2 registers (see lanes.hpp). Written with GCC's vector
+// extensions (the operators act lane by lane, as the scalar code's do on one contact) in
+// functions compiled for AVX2 alone: no fused multiply-adds, which would round differently
+// from the scalar law. Each scalar branch becomes a select between the values both sides
+// compute; lanes past the chunk's end repeat its last contact and are not stored.
 #include "sim/lanes.hpp"
 
 #include <algorithm>
@@ -17,7 +17,7 @@
 
 namespace cohdem {
 
-LinearLaneParams linear_lane_params(const LinearLaw::Params& p) {
+LinearLaneParams lane_params(const LinearLaw::Params& p) {
   LinearLaneParams q;
   q.kn = p.normal.kn;
   q.two_beta = 2.0 * p.damping.beta;
@@ -26,6 +26,19 @@ LinearLaneParams linear_lane_params(const LinearLaw::Params& p) {
   // LinearTangential::apply: kt > 0 ? kt : kt_ratio * kn, with kn = LinearNormal's kn.
   q.kt = p.tangential.kt > 0 ? p.tangential.kt : p.tangential.kt_ratio * p.normal.kn;
   q.damp_t = p.tangential.damp_t;
+  return q;
+}
+
+HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p) {
+  HertzEpsdLaneParams q;
+  q.two_Estar = 2.0 * p.normal.Estar;
+  q.two_beta = 2.0 * p.damping.beta;
+  q.limit = p.damping.limit ? 1.0 : 0.0;
+  q.mu = p.tangential.mu;
+  q.eight_Gstar = 8.0 * p.tangential.Gstar;
+  q.damp_kt = p.tangential.damp_kt;
+  q.mu_r = p.rolling.mu_r;
+  q.eta_r = p.rolling.eta_r;
   return q;
 }
 
@@ -38,171 +51,265 @@ typedef long long M4 __attribute__((vector_size(32)));  // lane masks: all ones 
 
 #define LANES_FN __attribute__((target("avx2"), always_inline)) inline
 
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
 LANES_FN V4 sqrt4(const V4 a) { return V4(_mm256_sqrt_pd(__m256d(a))); }
 /// std::max(a, 0.0) lane by lane: a < 0 ? 0 : a (a -0 or a NaN passes through, as there).
 LANES_FN V4 max0(const V4 a) { return V4(_mm256_max_pd(_mm256_setzero_pd(), __m256d(a))); }
 LANES_FN V4 sel(const M4 m, const V4 a, const V4 b) { return m ? a : b; }
 LANES_FN V4 splat(const double s) { return V4{s, s, s, s}; }
+LANES_FN void store(double* dst, const V4 a) { _mm256_storeu_pd(dst, __m256d(a)); }
 
-/// Four doubles from a[i0..i3].
+/// Four doubles a[idx[0..3]].
 LANES_FN V4 gather(const double* __restrict a, const uint32_t* idx) {
   return V4{a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]]};
 }
+/// Member m of four records p[idx[0..3]].
+template <class T>
+LANES_FN V4 gather(const T* __restrict p, const uint32_t* idx, double T::*m) {
+  return V4{p[idx[0]].*m, p[idx[1]].*m, p[idx[2]].*m, p[idx[3]].*m};
+}
 
 struct L3 { V4 x, y, z; };
-/// x, y, z of four Vec3s p[idx[0..3]], one lane each.
-LANES_FN L3 gather3(const Vec3* __restrict p, const uint32_t* idx) {
-  const __m256d t0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&p[idx[0]].x)), _mm_loadu_pd(&p[idx[2]].x), 1);
-  const __m256d t1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&p[idx[1]].x)), _mm_loadu_pd(&p[idx[3]].x), 1);
+LANES_FN L3 operator-(const L3& a, const L3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+LANES_FN L3 operator+(const L3& a, const L3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+LANES_FN L3 operator*(const L3& a, const V4 s) { return {a.x * s, a.y * s, a.z * s}; }
+LANES_FN V4 dot3(const L3& a, const L3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+LANES_FN L3 cross3(const L3& a, const L3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+LANES_FN L3 sel3(const M4 m, const L3& a, const L3& b) { return {sel(m, a.x, b.x), sel(m, a.y, b.y), sel(m, a.z, b.z)}; }
+
+/// x, y, z of four Vec3s, the Vec3 member m of records p[idx[0..3]], one lane each.
+template <class T>
+LANES_FN L3 gather3(const T* __restrict p, const uint32_t* idx, Vec3 T::*m) {
+  const Vec3* a[4] = {&(p[idx[0]].*m), &(p[idx[1]].*m), &(p[idx[2]].*m), &(p[idx[3]].*m)};
+  const __m256d t0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&a[0]->x)), _mm_loadu_pd(&a[2]->x), 1);
+  const __m256d t1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&a[1]->x)), _mm_loadu_pd(&a[3]->x), 1);
   L3 r;
   r.x = V4(_mm256_unpacklo_pd(t0, t1));
   r.y = V4(_mm256_unpackhi_pd(t0, t1));
-  r.z = V4(_mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&p[idx[0]].z), &p[idx[1]].z)),
-                                _mm_loadh_pd(_mm_load_sd(&p[idx[2]].z), &p[idx[3]].z), 1));
+  r.z = V4(_mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadh_pd(_mm_load_sd(&a[0]->z), &a[1]->z)),
+                                _mm_loadh_pd(_mm_load_sd(&a[2]->z), &a[3]->z), 1));
   return r;
 }
+struct VecRec { Vec3 v; };
+LANES_FN L3 gather3(const Vec3* __restrict p, const uint32_t* idx) {
+  return gather3(reinterpret_cast<const VecRec*>(p), idx, &VecRec::v);
+}
 
-LANES_FN V4 dot3(const L3& a, const L3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+/// The lanes' contacts: list entries, rows, partners, material pairs, and the kernel's
+/// PairGeom in lanes (the same operations as sim/force_kernel.hpp's scalar geometry).
+struct Group {
+  uint32_t hh[4], k[4], i[4], j[4], p[4];
+  uint32_t valid;  ///< lanes that hold a contact of the chunk
+  M4 fi, fj;       ///< i, j free (not frozen)
+  L3 n, vt;
+  V4 ri, rj, delta, rstar, mi, mj, mstar, vn, li, lj;
+};
 
-/// One group of four contacts (lanes whose hit lies past the chunk repeat its last one).
-__attribute__((target("avx2"))) void group(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
-                                          const uint32_t cnt, const uint32_t g, LaneOut& out) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  uint32_t hh[4], k[4], i[4], j[4], pidx[4];
+LANES_FN void geometry(const LaneInput& in, const ScreenHits& hits, const uint32_t h0, const uint32_t cnt,
+                       const uint32_t g, Group& G) {
   for (uint32_t l = 0; l < 4; ++l) {
-    hh[l] = h0 + std::min(g + l, cnt - 1);
-    k[l] = hits.k[hh[l]];
-    i[l] = hits.row[hh[l]];
-    j[l] = in.jdx[k[l]];
-    pidx[l] = uint32_t(size_t(in.species[i[l]]) * in.nmat + size_t(in.species[j[l]]));
+    G.hh[l] = h0 + std::min(g + l, cnt - 1);
+    G.k[l] = hits.k[G.hh[l]];
+    G.i[l] = hits.row[G.hh[l]];
+    G.j[l] = in.jdx[G.k[l]];
+    G.p[l] = uint32_t(size_t(in.species[G.i[l]]) * in.nmat + size_t(in.species[G.j[l]]));
   }
-  const M4 fi = M4{-(in.flag[i[0]] == kFree), -(in.flag[i[1]] == kFree), -(in.flag[i[2]] == kFree),
-                   -(in.flag[i[3]] == kFree)};
-  const M4 fj = M4{-(in.flag[j[0]] == kFree), -(in.flag[j[1]] == kFree), -(in.flag[j[2]] == kFree),
-                   -(in.flag[j[3]] == kFree)};
-  // The material pairs' parameters.
-  const LinearLaneParams* const P = in.params;
-  const V4 kn{P[pidx[0]].kn, P[pidx[1]].kn, P[pidx[2]].kn, P[pidx[3]].kn};
-  const V4 two_beta{P[pidx[0]].two_beta, P[pidx[1]].two_beta, P[pidx[2]].two_beta, P[pidx[3]].two_beta};
-  const V4 limit{P[pidx[0]].limit, P[pidx[1]].limit, P[pidx[2]].limit, P[pidx[3]].limit};
-  const V4 mu{P[pidx[0]].mu, P[pidx[1]].mu, P[pidx[2]].mu, P[pidx[3]].mu};
-  const V4 kt{P[pidx[0]].kt, P[pidx[1]].kt, P[pidx[2]].kt, P[pidx[3]].kt};
-  const V4 damp_t{P[pidx[0]].damp_t, P[pidx[1]].damp_t, P[pidx[2]].damp_t, P[pidx[3]].damp_t};
-
-  // Geometry (the kernel's PairGeom).
-  const V4 ri = gather(in.radius, i), rj = gather(in.radius, j);
-  const V4 rsum = ri + rj;
-  const V4 dist = sqrt4(gather(hits.d2, hh));
+  G.valid = std::min(4u, cnt - g);
+  const uint8_t* const flag = in.flag;
+  G.fi = M4{-(flag[G.i[0]] == kFree), -(flag[G.i[1]] == kFree), -(flag[G.i[2]] == kFree), -(flag[G.i[3]] == kFree)};
+  G.fj = M4{-(flag[G.j[0]] == kFree), -(flag[G.j[1]] == kFree), -(flag[G.j[2]] == kFree), -(flag[G.j[3]] == kFree)};
+  G.ri = gather(in.radius, G.i);
+  G.rj = gather(in.radius, G.j);
+  const V4 rsum = G.ri + G.rj;
+  const V4 dist = sqrt4(gather(hits.d2, G.hh));
   const V4 inv = splat(1.0) / dist;
-  L3 n;
-  n.x = gather(hits.dx, hh) * inv;
-  n.y = gather(hits.dy, hh) * inv;
-  n.z = gather(hits.dz, hh) * inv;
-  const V4 delta = rsum - dist;
-  const V4 rstar = ri * rj / rsum;
-  const V4 mi = sel(fi, gather(in.mass, i), splat(inf));
-  const V4 mj = sel(fj, gather(in.mass, j), splat(inf));
-  const V4 mstar = sel(fi & fj, mi * mj / (mi + mj), sel(fi, mi, mj));
-  const L3 vi = gather3(in.v, i), vj = gather3(in.v, j);
-  const L3 vij{vi.x - vj.x, vi.y - vj.y, vi.z - vj.z};
-  const V4 vn = dot3(vij, n);
-  const V4 li = ri - 0.5 * delta, lj = rj - 0.5 * delta;
-  const L3 wi = gather3(in.omega, i), wj = gather3(in.omega, j);
-  const L3 w{wi.x * li + wj.x * lj, wi.y * li + wj.y * lj, wi.z * li + wj.z * lj};
-  // vrel = vij - w x n
-  const L3 vrel{vij.x - (w.y * n.z - w.z * n.y), vij.y - (w.z * n.x - w.x * n.z), vij.z - (w.x * n.y - w.y * n.x)};
-  const V4 vrn = dot3(vrel, n);
-  const L3 vt{vrel.x - n.x * vrn, vrel.y - n.y * vrn, vrel.z - n.z * vrn};
+  G.n = L3{gather(hits.dx, G.hh), gather(hits.dy, G.hh), gather(hits.dz, G.hh)} * inv;
+  G.delta = rsum - dist;
+  G.rstar = G.ri * G.rj / rsum;
+  G.mi = sel(G.fi, gather(in.mass, G.i), splat(kInfinity));
+  G.mj = sel(G.fj, gather(in.mass, G.j), splat(kInfinity));
+  G.mstar = sel(G.fi & G.fj, G.mi * G.mj / (G.mi + G.mj), sel(G.fi, G.mi, G.mj));
+  const L3 vij = gather3(in.v, G.i) - gather3(in.v, G.j);
+  G.vn = dot3(vij, G.n);
+  G.li = G.ri - 0.5 * G.delta;
+  G.lj = G.rj - 0.5 * G.delta;
+  const L3 w = gather3(in.omega, G.i) * G.li + gather3(in.omega, G.j) * G.lj;
+  const L3 vrel = vij - cross3(w, G.n);
+  G.vt = vrel - G.n * dot3(vrel, G.n);
+}
 
-  // LinearNormal.
-  const M4 alive = delta > 0.0;
-  const V4 f_el = kn * delta;
-  // LinearRestitutionDamping (apply_limit: with limit_damping, a damping force that would
-  // make the total attractive leaves -max(f_el, 0)).
-  const V4 gamma = two_beta * sqrt4(mstar * kn);
+/// rotate_into_plane (core/vec3.hpp) in lanes: the series factor for small turns, else the
+/// exact one; a zero history stays as it is.
+LANES_FN void rotate_into_plane4(L3& h, const L3& n) {
+  const V4 m0 = dot3(h, h);
+  const V4 hn = dot3(n, h);
+  L3 r = h - n * hn;
+  const V4 hn2 = hn * hn;
+  const V4 x = hn2 / m0;
+  const V4 fser = 1.0 + x * (0.5 + x * (0.375 + x * 0.3125));
+  const V4 m1 = dot3(r, r);
+  const V4 fex = sel(m1 > 0.0, sqrt4(m0 / m1), splat(1.0));
+  r = r * sel(hn2 < 1e-4 * m0, fser, fex);
+  h = sel3(m0 > 0.0, r, h);
+}
+
+/// limit_scale (core/vec3.hpp) in lanes; over: m2 > lim^2.
+LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
+  over = m2 > lim * lim;
+  return sel(over, lim / sqrt4(sel(over, m2, splat(1.0))), splat(1.0));
+}
+
+/// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
+/// gamma_n in gamma.
+LANES_FN V4 damping4(const V4 two_beta, const V4 limit, const V4 mstar, const V4 kn, const V4 vn, const V4 f_el,
+                     V4& gamma) {
+  gamma = two_beta * sqrt4(mstar * kn);
   const V4 fd0 = -gamma * vn;
   const M4 lim_on = (limit != 0.0) & (f_el + fd0 < 0.0) & (fd0 < 0.0);
-  const V4 fd = sel(lim_on, -max0(f_el), fd0);
-  const V4 fn = f_el + fd;
-  const V4 fc = max0(fn);  // NormalBase::coulomb_base
-
-  // LinearTangential (TangentialCommon::update). 1. The history into the tangent plane,
-  // its length kept (rotate_into_plane: series factor for small turns, else the exact one).
-  L3 fs = gather3(in.fs, k);
-  {
-    const V4 m0 = dot3(fs, fs);
-    const V4 hn = n.x * fs.x + n.y * fs.y + n.z * fs.z;
-    L3 h{fs.x - n.x * hn, fs.y - n.y * hn, fs.z - n.z * hn};
-    const V4 hn2 = hn * hn;
-    const M4 series = hn2 < 1e-4 * m0;
-    const V4 x = hn2 / m0;
-    const V4 fser = 1.0 + x * (0.5 + x * (0.375 + x * 0.3125));
-    const V4 m1 = dot3(h, h);
-    const V4 fex = sel(m1 > 0.0, sqrt4(m0 / m1), splat(1.0));
-    const V4 fac = sel(series, fser, fex);
-    h.x *= fac;
-    h.y *= fac;
-    h.z *= fac;
-    const M4 turn = m0 > 0.0;
-    fs.x = sel(turn, h.x, fs.x);
-    fs.y = sel(turn, h.y, fs.y);
-    fs.z = sel(turn, h.z, fs.z);
-  }
-  // 3. the increment, the trial force; 4. the Coulomb limit (limit_scale).
-  const V4 ktdt = kt * in.dt;
-  fs.x -= vt.x * ktdt;
-  fs.y -= vt.y * ktdt;
-  fs.z -= vt.z * ktdt;
-  const V4 gamma_t = damp_t * gamma;
-  L3 ft{fs.x - vt.x * gamma_t, fs.y - vt.y * gamma_t, fs.z - vt.z * gamma_t};
-  const V4 lim = mu * fc;
-  const V4 f2 = dot3(ft, ft);
-  const M4 slide = f2 > lim * lim;
-  const V4 scale = sel(slide, lim / sqrt4(sel(slide, f2, splat(1.0))), splat(1.0));
-  ft.x *= scale;
-  ft.y *= scale;
-  ft.z *= scale;
-  fs.x = sel(slide, ft.x, fs.x);
-  fs.y = sel(slide, ft.y, fs.y);
-  fs.z = sel(slide, ft.z, fs.z);
-
-  // ContactLaw::evaluate's assembly (two spheres: lever arms r - delta/2).
-  const L3 nxft{n.y * ft.z - n.z * ft.y, n.z * ft.x - n.x * ft.z, n.x * ft.y - n.y * ft.x};
-  const V4 mli = -li, mlj = -lj;
-  _mm256_storeu_pd(out.fx + g, __m256d(n.x * fn + ft.x));
-  _mm256_storeu_pd(out.fy + g, __m256d(n.y * fn + ft.y));
-  _mm256_storeu_pd(out.fz + g, __m256d(n.z * fn + ft.z));
-  _mm256_storeu_pd(out.tix + g, __m256d(nxft.x * mli));
-  _mm256_storeu_pd(out.tiy + g, __m256d(nxft.y * mli));
-  _mm256_storeu_pd(out.tiz + g, __m256d(nxft.z * mli));
-  _mm256_storeu_pd(out.tjx + g, __m256d(nxft.x * mlj));
-  _mm256_storeu_pd(out.tjy + g, __m256d(nxft.y * mlj));
-  _mm256_storeu_pd(out.tjz + g, __m256d(nxft.z * mlj));
-  // LinearNormal's contact radius (read only for live contacts).
-  _mm256_storeu_pd(out.a + g, __m256d(in.want_a ? sqrt4(rstar * delta) : splat(0.0)));
-  const int am = _mm256_movemask_pd(__m256d(alive));
-  // The histories: a contact that ended starts again from zero (ContactLaw: s = State{}).
-  alignas(32) double sx[4], sy[4], sz[4];
-  _mm256_store_pd(sx, __m256d(alive & M4(fs.x)));
-  _mm256_store_pd(sy, __m256d(alive & M4(fs.y)));
-  _mm256_store_pd(sz, __m256d(alive & M4(fs.z)));
-  const uint32_t nl = std::min(4u, cnt - g);
-  for (uint32_t l = 0; l < nl; ++l) {
-    out.alive[g + l] = uint8_t((am >> l) & 1);
-    in.fs[k[l]] = Vec3{sx[l], sy[l], sz[l]};
-  }
+  return sel(lim_on, -max0(f_el), fd0);
 }
+
+/// TangentialCommon::update after its stiffness step: increment, trial force, Coulomb limit.
+/// Returns the tangential force; fs becomes the new spring force.
+LANES_FN L3 spring4(L3& fs, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t, const V4 mu, const V4 fc) {
+  fs = fs - vt * (kt * dt);
+  L3 ft = fs - vt * gamma_t;
+  M4 slide;
+  ft = ft * limit_scale4(dot3(ft, ft), mu * fc, slide);
+  fs = sel3(slide, ft, fs);
+  return ft;
+}
+
+/// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
+LANES_FN void put(const Group& G, const uint32_t g, const V4 fn, const L3& ft, const L3* mr, const V4 a, LaneOut& out) {
+  const L3 nxft = cross3(G.n, ft);
+  const L3 f = G.n * fn + ft;
+  L3 ti = nxft * -G.li, tj = nxft * -G.lj;
+  if (mr != nullptr) {
+    ti = ti + *mr;
+    tj = tj - *mr;
+  }
+  store(out.fx + g, f.x);
+  store(out.fy + g, f.y);
+  store(out.fz + g, f.z);
+  store(out.tix + g, ti.x);
+  store(out.tiy + g, ti.y);
+  store(out.tiz + g, ti.z);
+  store(out.tjx + g, tj.x);
+  store(out.tjy + g, tj.y);
+  store(out.tjz + g, tj.z);
+  store(out.a + g, a);
+}
+
+/// The lanes of a Vec3 history member, zeroed where the contact ended (ContactLaw: s = State{}).
+struct Lanes3 { alignas(32) double x[4], y[4], z[4]; };
+LANES_FN void keep(const L3& h, const M4 alive, Lanes3& o) {
+  _mm256_store_pd(o.x, __m256d(alive & M4(h.x)));
+  _mm256_store_pd(o.y, __m256d(alive & M4(h.y)));
+  _mm256_store_pd(o.z, __m256d(alive & M4(h.z)));
+}
+
+LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
 
 }  // namespace
 
 __attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
                                                        const uint32_t cnt, LaneOut& out) {
-  for (uint32_t g = 0; g < cnt; g += 4) group(in, hits, h0, cnt, g, out);
+  const auto* const P = static_cast<const LinearLaneParams*>(in.params);
+  auto* const H = static_cast<LinearLaneHistory*>(in.hist);
+  using LP = LinearLaneParams;
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    // LinearNormal.
+    const V4 kn = gather(P, G.p, &LP::kn);
+    const M4 alive = G.delta > 0.0;
+    const V4 f_el = kn * G.delta;
+    V4 gamma;
+    const V4 fn = f_el + damping4(gather(P, G.p, &LP::two_beta), gather(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+    const V4 fc = max0(fn);  // NormalBase::coulomb_base
+    // LinearTangential: kt fixed per material pair.
+    L3 fs = gather3(H, G.k, &LinearLaneHistory::fs);
+    rotate_into_plane4(fs, G.n);
+    const L3 ft = spring4(fs, G.vt, gather(P, G.p, &LP::kt), splat(in.dt), gather(P, G.p, &LP::damp_t) * gamma,
+                          gather(P, G.p, &LP::mu), fc);
+    // LinearNormal's contact radius, read only when asked for.
+    put(G, g, fn, ft, nullptr, in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0), out);
+    Lanes3 s;
+    keep(fs, alive, s);
+    const int am = _mm256_movemask_pd(__m256d(alive));
+    for (uint32_t l = 0; l < G.valid; ++l) {
+      out.alive[g + l] = uint8_t((am >> l) & 1);
+      H[G.k[l]].fs = Vec3{s.x[l], s.y[l], s.z[l]};
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
+                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+  const auto* const P = static_cast<const HertzEpsdLaneParams*>(in.params);
+  auto* const H = static_cast<HertzEpsdLaneHistory*>(in.hist);
+  using LP = HertzEpsdLaneParams;
+  using LH = HertzEpsdLaneHistory;
+  const V4 dt = splat(in.dt);
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    // HertzNormal (the lanes of ended contacts compute what no one reads).
+    const M4 alive = G.delta > 0.0;
+    const V4 a = sqrt4(G.rstar * G.delta);
+    const V4 kn = gather(P, G.p, &LP::two_Estar) * a;
+    const V4 f_el = (2.0 / 3.0) * kn * G.delta;
+    V4 gamma;
+    const V4 fn = f_el + damping4(gather(P, G.p, &LP::two_beta), gather(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+    const V4 fc = max0(fn);
+    // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
+    const V4 kt = gather(P, G.p, &LP::eight_Gstar) * a;
+    L3 fs = gather3(H, G.k, &LH::fs);
+    rotate_into_plane4(fs, G.n);
+    const V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+    fs = sel3((kt_prev > 0.0) & (kt < kt_prev), fs * (kt / kt_prev), fs);
+    const L3 ft = spring4(fs, G.vt, kt, dt, gather(P, G.p, &LP::damp_kt) * gamma, gather(P, G.p, &LP::mu), fc);
+    // EpsdRolling.
+    const V4 mu_r = gather(P, G.p, &LP::mu_r), eta_r = gather(P, G.p, &LP::eta_r);
+    const L3 wrel = gather3(in.omega, G.i) - gather3(in.omega, G.j);
+    const L3 wr = wrel - G.n * dot3(G.n, wrel);
+    L3 mk = gather3(H, G.k, &LH::mk);
+    rotate_into_plane4(mk, G.n);
+    const V4 kr = 2.25 * kn * mu_r * mu_r * G.rstar * G.rstar;
+    mk = mk - wr * (kr * dt);
+    M4 slide;
+    mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
+    // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body (I = inf) adds nothing.
+    const V4 Ii = sel(G.fi, gather(in.inertia, G.i), splat(kInfinity));
+    const V4 Ij = sel(G.fj, gather(in.inertia, G.j), splat(kInfinity));
+    const M4 wi = is_inf(Ii), wj = is_inf(Ij);
+    const V4 Ji = sel(wi, splat(0.0), Ii + G.mi * G.ri * G.ri), Jj = sel(wj, splat(0.0), Ij + G.mj * G.rj * G.rj);
+    const V4 Ir = sel(wj, Ji, sel(wi, Jj, Ji * Jj / (Ji + Jj)));
+    const L3 damped = mk - wr * (eta_r * 2.0 * sqrt4(Ir * kr));
+    const L3 mr = sel3(eta_r > 0.0, sel3(slide, mk, damped), mk);
+    put(G, g, fn, ft, &mr, a, out);
+    Lanes3 s, m;
+    keep(fs, alive, s);
+    keep(mk, alive, m);
+    const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt)));
+    alignas(32) double kp[4];
+    _mm256_store_pd(kp, __m256d(ktp));
+    const int am = _mm256_movemask_pd(__m256d(alive));
+    for (uint32_t l = 0; l < G.valid; ++l) {
+      out.alive[g + l] = uint8_t((am >> l) & 1);
+      H[G.k[l]] = LH{Vec3{s.x[l], s.y[l], s.z[l]}, kp[l], Vec3{m.x[l], m.y[l], m.z[l]}};
+    }
+  }
 }
 
 #else
 
 void linear_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+void hertz_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 
 #endif
 

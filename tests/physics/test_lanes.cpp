@@ -1,10 +1,13 @@
-// The linear law's contacts evaluated four at a time in AVX2 lanes (src/sim/lanes.hpp) must
-// give the scalar law's results bit for bit: forces, torques, histories and which contacts
-// live, contact by contact, and so whole runs. Checked on a bed that reaches every branch the
-// scalar code has: two species with their own parameters per material pair (kt given or from
-// kt_ratio, limit_damping on and off, tangential damping), frozen partners, periodic images,
-// histories turned out of the tangent plane by small and by large angles, zero histories,
-// sliding and sticking contacts, and live entries whose spheres have parted (history reset).
+// The contacts evaluated four at a time in AVX2 lanes (src/sim/lanes.hpp: the linear law,
+// Hertz-Mindlin with EPSD rolling) must give the scalar laws' results bit for bit: forces,
+// torques, histories and which contacts live, contact by contact, and so whole runs. Checked
+// on a bed that reaches every branch the scalar code has: two species with their own
+// parameters per material pair (linear: kt given or from kt_ratio; limit_damping on and off,
+// tangential damping; Hertz-Mindlin: two E* and G*, rolling damping on and off), frozen
+// partners, periodic images, histories turned out of the tangent plane by small and by large
+// angles, zero histories, sliding and sticking springs (tangential and rolling), tangential
+// stiffnesses that fell or rose since the last step, and live entries whose spheres have
+// parted (history reset).
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -23,18 +26,31 @@ namespace {
 
 constexpr double kL = 0.03;  // periodic cell in x and y, m
 
+enum class Law { Linear, HertzEpsd };
+
 // 500 spheres of two species dropped onto a floor in a periodic cell (gravity 200 m/s^2, to
-// settle in a few thousand steps), one in ten frozen;
-// material pairs with parameters of their own.
-std::unique_ptr<System> make_bed(int threads) {
-  auto s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", "none",
-                       params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}}), 1e-5, {0, 0, -200.0}, 3e-4);
-  // a-a: the defaults (kt = 2/7 kn); a-b: kt given, limit_damping, tangential damping;
-  // b-b: another restitution and friction, tangential damping.
-  const ParamSet aa = params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}});
-  const ParamSet ab = params({{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1}, {"damp_t", 0.5}});
-  const ParamSet bb = params({{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}});
-  s->set_model(make_contact_model("linear", "none"), {aa, ab, ab, bb});
+// settle in a few thousand steps), one in ten frozen; material pairs with parameters of
+// their own.
+std::unique_ptr<System> make_bed(Law law, int threads) {
+  std::unique_ptr<System> s;
+  if (law == Law::Linear) {
+    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", "none",
+                    params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}}), 1e-5, {0, 0, -200.0}, 3e-4);
+    // a-a: the defaults (kt = 2/7 kn); a-b: kt given, limit_damping, tangential damping;
+    // b-b: another restitution and friction, tangential damping.
+    const ParamSet aa = params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}});
+    const ParamSet ab = params({{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1}, {"damp_t", 0.5}});
+    const ParamSet bb = params({{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}});
+    s->set_model(make_contact_model("linear", "none"), {aa, ab, ab, bb});
+  } else {
+    s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", "epsd",
+                    params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
+    // a-a: no rolling damping; a-b: limit_damping, rolling damping; b-b: others.
+    const ParamSet aa = params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
+    const ParamSet ab = params({{"e", 0.2}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"limit_damping", 1}, {"damp_t", 0.5}});
+    const ParamSet bb = params({{"e", 0.9}, {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+    s->set_model(make_contact_model("hertz_mindlin", "epsd"), {aa, ab, ab, bb});
+  }
   s->cfg.threads = threads;
   s->cfg.parallel_min = 0;
   s->cfg.domain.lo = {0, 0, 0};
@@ -101,21 +117,36 @@ bool avx2_here() {
   return ok;
 }
 
-}  // namespace
 
-TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+// A random history vector for an entry of normal n: a random direction (most lie out of the
+// tangent plane by large angles: the exact rescaling), or three in ten nearly in the plane (a
+// turn of ~1e-3 rad: the series), of length 10^lo .. 10^hi; one in eight zero.
+Vec3 random_history(Rng& rng, const Vec3& n, double lo, double hi, size_t& small_turn) {
+  Vec3 h{rng.normal(), rng.normal(), rng.normal()};
+  if (rng.uniform(0, 1) < 0.3) {
+    h -= n * dot(n, h);
+    h += n * (1e-3 * std::sqrt(norm2(h)));
+    ++small_turn;
+  }
+  h *= std::pow(10.0, rng.uniform(lo, hi)) / std::sqrt(norm2(h));
+  return rng.uniform(0, 1) < 0.125 ? Vec3{} : h;
+}
+
+// One force evaluation, scalar and in lanes, from the same state with histories set by hand
+// on every entry that touches and on some that do not (marked live: the law must end them).
+void contact_by_contact(Law law) {
   const bool was = screen_avx2_enabled();
-  auto s = make_bed(1);
+  auto s = make_bed(law, 1);
   s->run(3000);  // settling: contacts with histories, frozen partners, images
   auto& nl = s->nl;
-  auto* fs = reinterpret_cast<Vec3*>(nl.hist.data.data());
-  ASSERT_GE(nl.hist.data.size(), nl.jdx.size() * sizeof(Vec3));
+  const size_t stride = s->model->state_size();  // fs at 0; Hertz-Mindlin: kt_prev at 24, mk at 32
+  ASSERT_EQ(stride, law == Law::Linear ? sizeof(LinearLaneHistory) : sizeof(HertzEpsdLaneHistory));
+  ASSERT_GE(nl.hist.data.size(), nl.jdx.size() * stride);
   const auto& P = s->particles;
-  // Histories set by hand on every entry that touches, and on some that do not (marked
-  // live: the law must end them): random directions, so that most lie out of the tangent
-  // plane by large angles (the exact rescaling) and some by tiny ones (the series), with
-  // lengths from 1e-9 N to 1 N (sticking to sliding); one in eight zero.
+  auto rec = [&](std::vector<std::byte>& d, size_t k) { return d.data() + k * stride; };
+  // Tangential springs of 1e-9 N to 1 N (sticking to sliding); Hertz-Mindlin: a last stiffness
+  // of zero (a new contact) or 10 to 10^4 N/m (below and above the current 8 G* a, some
+  // hundreds of N/m here), rolling springs of 1e-12 to 1e-5 N m (limit mu_r R* F_c ~ 1e-8).
   Rng rng(17);
   size_t touching = 0, parted = 0, small_turn = 0, frozen_partner = 0;
   for (size_t i = 0; i < P.size(); ++i) {
@@ -126,15 +157,14 @@ TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
       const bool touch = dist < P.radius[i] + P.radius[j];
       if (!touch && rng.uniform(0, 1) > 0.05) continue;
       const Vec3 n = d * (1.0 / dist);
-      Vec3 h{rng.normal(), rng.normal(), rng.normal()};
-      if (rng.uniform(0, 1) < 0.3) {  // nearly in the plane: a turn of ~1e-3 rad
-        h -= n * dot(n, h);
-        h += n * (1e-3 * std::sqrt(norm2(h)));
-        ++small_turn;
+      const Vec3 fs = random_history(rng, n, -9, 0, small_turn);
+      std::memcpy(rec(nl.hist.data, k), &fs, sizeof fs);
+      if (law == Law::HertzEpsd) {
+        const double kt_prev = rng.uniform(0, 1) < 0.3 ? 0.0 : std::pow(10.0, rng.uniform(1, 4));
+        const Vec3 mk = random_history(rng, n, -12, -5, small_turn);
+        std::memcpy(rec(nl.hist.data, k) + 24, &kt_prev, sizeof kt_prev);
+        std::memcpy(rec(nl.hist.data, k) + 32, &mk, sizeof mk);
       }
-      h *= std::pow(10.0, rng.uniform(-9, 0)) / std::sqrt(norm2(h));
-      if (rng.uniform(0, 1) < 0.125) h = Vec3{};
-      fs[k] = h;
       nl.hist.live[k] = 1;
       touching += touch;
       parted += !touch;
@@ -146,7 +176,7 @@ TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
   const std::vector<std::byte> whist0 = nl.whist.data;  // the floor's contacts (scalar in both)
   const std::vector<uint8_t> wlive0 = nl.whist.live;
   const std::vector<Vec3> f0 = P.force, t0 = P.torque;
-  const Result a = force_call(*s, false);
+  Result a = force_call(*s, false);
   nl.hist.data = hist0;
   nl.hist.live = live0;
   nl.whist.data = whist0;
@@ -155,37 +185,57 @@ TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
   s->particles.torque = t0;
   const Result b = force_call(*s, true);
   set_screen_avx2(was);
-  // Coverage: the bed must reach what it is meant to.
-  size_t slid = 0;
+  // Coverage: the bed must reach what it is meant to. A spring cut to its limit is at least
+  // halved here (sliding); a stiffness that fell scales the spring by kt/kt_prev.
+  std::vector<std::byte> h0 = hist0;
+  size_t slid = 0, rolled = 0, softened = 0;
   for (size_t k = 0; k < nl.jdx.size(); ++k) {
-    const Vec3 h0 = reinterpret_cast<const Vec3*>(hist0.data())[k];
-    const Vec3 h1 = reinterpret_cast<const Vec3*>(a.hist.data())[k];
-    slid += a.live[k] && norm2(h1) < 0.25 * norm2(h0);  // cut to the Coulomb limit
+    if (!a.live[k]) continue;
+    Vec3 f0k, f1k;
+    std::memcpy(&f0k, rec(h0, k), sizeof f0k);
+    std::memcpy(&f1k, rec(a.hist, k), sizeof f1k);
+    slid += norm2(f1k) < 0.25 * norm2(f0k);
+    if (law == Law::HertzEpsd) {
+      Vec3 m0k, m1k;
+      double kp0, kp1;
+      std::memcpy(&m0k, rec(h0, k) + 32, sizeof m0k);
+      std::memcpy(&m1k, rec(a.hist, k) + 32, sizeof m1k);
+      std::memcpy(&kp0, rec(h0, k) + 24, sizeof kp0);
+      std::memcpy(&kp1, rec(a.hist, k) + 24, sizeof kp1);
+      rolled += norm2(m1k) < 0.25 * norm2(m0k);
+      softened += kp0 > kp1 && kp1 > 0;
+    }
   }
-  std::printf("[info] lanes: %zu touching, %zu parted, %zu small turns, %zu frozen partners, %zu cut to the limit\n",
-              touching, parted, small_turn, frozen_partner, slid);
+  std::printf("[info] lanes: %zu touching, %zu parted, %zu small turns, %zu frozen partners, %zu sliding, "
+              "%zu rolling springs cut, %zu stiffnesses fallen\n",
+              touching, parted, small_turn, frozen_partner, slid, rolled, softened);
   EXPECT_GT(touching, 500u);
   EXPECT_GT(parted, 20u);
   EXPECT_GT(small_turn, 100u);
   EXPECT_GT(frozen_partner, 20u);
   EXPECT_GT(slid, 100u);
+  if (law == Law::HertzEpsd) {
+    EXPECT_GT(rolled, 100u);
+    EXPECT_GT(softened, 100u);
+  }
   // Bit for bit (memcmp: the sign of a zero counts).
   EXPECT_EQ(differing(a.f, b.f), 0u);
   EXPECT_EQ(differing(a.t, b.t), 0u);
   EXPECT_TRUE(a.live == b.live);
   EXPECT_TRUE(a.hist == b.hist);
-  report("lanes vs scalar linear law: particles with any differing force or torque bit", double(differing(a.f, b.f) + differing(a.t, b.t)),
-         0.0, 0, "==");
+  report(law == Law::Linear ? "lanes vs scalar, linear: particles with any differing force or torque bit"
+                            : "lanes vs scalar, Hertz-Mindlin + EPSD: particles with any differing force or torque bit",
+         double(differing(a.f, b.f) + differing(a.t, b.t)), 0.0, 0, "==");
 }
 
-TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+// Whole runs (1500 steps), scalar and in lanes, on one and two threads.
+void whole_runs(Law law) {
   const bool was = screen_avx2_enabled();
   Result r[2][2];
   for (int lanes = 0; lanes < 2; ++lanes)
     for (int nt = 1; nt <= 2; ++nt) {
       set_screen_avx2(lanes == 1);
-      auto s = make_bed(nt);
+      auto s = make_bed(law, nt);
       s->run(1500);
       r[lanes][nt - 1] = state_of(*s);
     }
@@ -197,4 +247,26 @@ TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
     EXPECT_EQ(differing(r[0][t].w, r[1][t].w), 0u) << t + 1 << " threads";
   }
   EXPECT_EQ(differing(r[1][0].x, r[1][1].x), 0u) << "lanes: 1 vs 2 threads";
+}
+
+}  // namespace
+
+TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  contact_by_contact(Law::Linear);
+}
+
+TEST(Lanes, HertzMindlinEpsdContactByContactAsTheScalarLaw) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  contact_by_contact(Law::HertzEpsd);
+}
+
+TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  whole_runs(Law::Linear);
+}
+
+TEST(Lanes, HertzMindlinEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  whole_runs(Law::HertzEpsd);
 }
