@@ -108,7 +108,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     lane_table.reserve(params_.size());
     for (const Params& q : params_) lane_table.push_back(lane_params(q));
   }
-  const void* const lane_p = lane_table.data();
+  bool lanes_usable = Lanes::kHave;
+  if constexpr (Lanes::kHave)
+    for (const Params& q : params_) lanes_usable = lanes_usable && Lanes::usable(q);
+  const void* const lane_p = lanes_usable ? lane_table.data() : nullptr;
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;
@@ -228,7 +231,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // kLaneChunk per call, whose results are then added one contact at a time in list
       // order. The next chunk's records are asked for while one is evaluated.
       if constexpr (Lanes::kHave) {
-        if (simd) {
+        if (simd && lane_p != nullptr) {
           const LaneInput lin{jdx, v, omega, radius, mass, inertia, flag, species, lane_p, nmat, hs, dt, want_a};
           for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
           LaneOut lo;

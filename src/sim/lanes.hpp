@@ -1,7 +1,9 @@
 // Contacts evaluated four at a time, one per lane of an AVX2 register ("lanes of contacts"),
-// for the two laws of the peer benchmarks: the linear law without rolling or twisting
+// for the two laws of the peer benchmarks, the linear law without rolling or twisting
 // resistance (LAMMPS's chute, the poured packing) and Hertz-Mindlin with EPSD rolling
-// resistance (the chute's `granular hmr` variant). The force loop (sim/force_kernel.hpp)
+// resistance (the chute's `granular hmr` variant), and for MEPA with EPSD rolling (the ring
+// shear tester's law) where every material pair has fixed stiffnesses, n = 1 or 3/2 and no
+// dp_shift (lane_usable; other MEPA settings run the scalar law). The force loop (sim/force_kernel.hpp)
 // screens a batch of list entries as before; the touching ones are then evaluated here in
 // groups of four, and the loop adds their results to the particles' sums one contact at a
 // time, in list order.
@@ -22,6 +24,7 @@
 #include "models/damping/restitution.hpp"
 #include "models/normal/hertz.hpp"
 #include "models/normal/linear.hpp"
+#include "models/normal/mepa.hpp"
 #include "models/rolling/rolling.hpp"
 #include "models/tangential/spring.hpp"
 #include "models/twisting/twisting.hpp"
@@ -31,6 +34,7 @@ namespace cohdem {
 
 using LinearLaw = ContactLaw<LinearNormal, LinearRestitutionDamping, LinearTangential, NoRolling, NoTwisting>;
 using HertzEpsdLaw = ContactLaw<HertzNormal, TsujiDamping, MindlinTangential, EpsdRolling, NoTwisting>;
+using MepaEpsdLaw = ContactLaw<MepaNormal, ViscousDamping, HystTangential<MepaNormal>, EpsdRolling, NoTwisting>;
 
 /// A material pair's parameters of the linear law, as the lanes read them: each a value the
 /// scalar law computes from its Params in the same way (2 beta, the resolved kt), so that the
@@ -55,10 +59,26 @@ struct HertzEpsdLaneParams {
 };
 HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p);
 
+/// The same for MEPA with EPSD rolling (flags as 1.0 or 0.0).
+struct MepaEpsdLaneParams {
+  double k1, k2, plastic, kadh, f0;
+  double n;     ///< 1 or 1.5
+  double n_is_1;
+  double offset;  ///< coulomb_offset
+  double gamma_n, limit, mu;
+  double kt_const, kt_c, kt_ratio, kt_mult, damp_t;
+  double mu_r, eta_r;
+};
+MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p);
+/// Whether a material pair's MEPA settings are those the lanes do (fixed k1, k2; n = 1 or
+/// 3/2; adhesion with the same exponent; no dp_shift).
+bool lane_usable(const MepaEpsdLaw::Params& p);
+
 /// The laws' histories as the lanes read them (static_asserts in the force loop check the
 /// layouts against ContactLaw::State).
 struct LinearLaneHistory { Vec3 fs; };
 struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
+struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
 /// parameters (nmat x nmat, row = species of i, of the law's lane-parameter type) and the
@@ -94,8 +114,10 @@ struct LaneOut {
 /// update their histories. AVX2 only: call when screen_avx2_enabled().
 void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 
-/// Which laws have lanes, with their lane parameters, history and evaluation.
+/// Which laws have lanes, with their lane parameters, history and evaluation, and whether a
+/// material pair's settings can take them (usable: all pairs must).
 template <class Law>
 struct LaneLaw {
   static constexpr bool kHave = false;
@@ -108,6 +130,7 @@ struct LaneLaw<LinearLaw> {
   using Params = LinearLaneParams;
   using History = LinearLaneHistory;
   static constexpr auto eval = linear_lanes_avx2;
+  static bool usable(const LinearLaw::Params&) { return true; }
 };
 template <>
 struct LaneLaw<HertzEpsdLaw> {
@@ -115,6 +138,15 @@ struct LaneLaw<HertzEpsdLaw> {
   using Params = HertzEpsdLaneParams;
   using History = HertzEpsdLaneHistory;
   static constexpr auto eval = hertz_epsd_lanes_avx2;
+  static bool usable(const HertzEpsdLaw::Params&) { return true; }
+};
+template <>
+struct LaneLaw<MepaEpsdLaw> {
+  static constexpr bool kHave = true;
+  using Params = MepaEpsdLaneParams;
+  using History = MepaEpsdLaneHistory;
+  static constexpr auto eval = mepa_epsd_lanes_avx2;
+  static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
 };
 
 /// The lane histories are the laws' State, byte for byte.
@@ -127,7 +159,17 @@ constexpr bool lane_history_layouts() {
   b.tangential.kt_prev = 4;
   b.rolling.mk = {5, 6, 7};
   const auto lb = std::bit_cast<HertzEpsdLaneHistory>(b);
-  return la.fs == Vec3{1, 2, 3} && lb.fs == Vec3{1, 2, 3} && lb.kt_prev == 4 && lb.mk == Vec3{5, 6, 7};
+  MepaEpsdLaw::State c{};
+  c.normal.Dmax = 8;
+  c.normal.Dp = 9;
+  c.normal.branch = 2;
+  c.tangential.fs = {1, 2, 3};
+  c.tangential.kt_prev = 4;
+  c.rolling.mk = {5, 6, 7};
+  const auto lc = std::bit_cast<MepaEpsdLaneHistory>(c);
+  return la.fs == Vec3{1, 2, 3} && lb.fs == Vec3{1, 2, 3} && lb.kt_prev == 4 && lb.mk == Vec3{5, 6, 7} &&
+         lc.Dmax == 8 && lc.Dp == 9 && lc.branch == 2 && lc.fs == Vec3{1, 2, 3} && lc.kt_prev == 4 &&
+         lc.mk == Vec3{5, 6, 7};
 }
 static_assert(lane_history_layouts(), "the lanes' histories must be the laws' State, byte for byte");
 

@@ -42,6 +42,38 @@ HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p) {
   return q;
 }
 
+MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p) {
+  const auto& np = p.normal;
+  const auto& tp = p.tangential;
+  MepaEpsdLaneParams q;
+  q.k1 = np.k1;
+  q.k2 = np.k2;
+  q.plastic = np.plastic;
+  q.kadh = np.kadh;
+  q.f0 = np.f0;
+  q.n = np.n;
+  q.n_is_1 = np.n == 1.0 ? 1.0 : 0.0;
+  q.offset = np.offset ? 1.0 : 0.0;
+  q.gamma_n = p.damping.gamma_n;
+  q.limit = p.damping.limit ? 1.0 : 0.0;
+  q.mu = tp.mu;
+  q.kt_const = tp.kt_const ? 1.0 : 0.0;
+  q.kt_c = tp.kt_c;
+  q.kt_ratio = tp.kt_ratio;
+  q.kt_mult = tp.kt_mult;
+  q.damp_t = tp.damp_t;
+  q.mu_r = p.rolling.mu_r;
+  q.eta_r = p.rolling.eta_r;
+  return q;
+}
+
+bool lane_usable(const MepaEpsdLaw::Params& p) {
+  const auto& np = p.normal;
+  // HystereticNormal::apply with p.fixed, x_is_n and no shift; pow_nm1 as 1 or a square root;
+  // HystTangential without kt_hertz (never with fixed stiffnesses; checked all the same).
+  return np.fixed && np.x_is_n && !np.shift && (np.n == 1.0 || np.n == 1.5) && !p.tangential.kt_hertz;
+}
+
 #if defined(__x86_64__)
 
 namespace {
@@ -164,13 +196,18 @@ LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
 
 /// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
 /// gamma_n in gamma.
-LANES_FN V4 damping4(const V4 two_beta, const V4 limit, const V4 mstar, const V4 kn, const V4 vn, const V4 f_el,
-                     V4& gamma) {
-  gamma = two_beta * sqrt4(mstar * kn);
+/// apply_limit (models/damping/restitution.hpp) in lanes: the damping force of gamma_n.
+LANES_FN V4 apply_limit4(const V4 limit, const V4 gamma, const V4 vn, const V4 f_el) {
   const V4 fd0 = -gamma * vn;
   const M4 lim_on = (limit != 0.0) & (f_el + fd0 < 0.0) & (fd0 < 0.0);
   return sel(lim_on, -max0(f_el), fd0);
 }
+LANES_FN V4 damping4(const V4 two_beta, const V4 limit, const V4 mstar, const V4 kn, const V4 vn, const V4 f_el,
+                     V4& gamma) {
+  gamma = two_beta * sqrt4(mstar * kn);
+  return apply_limit4(limit, gamma, vn, f_el);
+}
+
 
 /// TangentialCommon::update after its stiffness step: increment, trial force, Coulomb limit.
 /// Returns the tangential force; fs becomes the new spring force.
@@ -181,6 +218,40 @@ LANES_FN L3 spring4(L3& fs, const L3& vt, const V4 kt, const V4 dt, const V4 gam
   ft = ft * limit_scale4(dot3(ft, ft), mu * fc, slide);
   fs = sel3(slide, ft, fs);
   return ft;
+}
+
+/// TangentialCommon::update with a stiffness record (State::kt_prev): rotation, the spring
+/// scaled by kt/kt_prev where the stiffness fell, then spring4; kt_prev becomes kt.
+LANES_FN L3 spring_prev4(L3& fs, V4& kt_prev, const L3& n, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t,
+                         const V4 mu, const V4 fc) {
+  rotate_into_plane4(fs, n);
+  fs = sel3((kt_prev > 0.0) & (kt < kt_prev), fs * (kt / kt_prev), fs);
+  kt_prev = kt;
+  return spring4(fs, vt, kt, dt, gamma_t, mu, fc);
+}
+
+LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
+
+/// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
+LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, const V4 fc, const V4 mu_r,
+                  const V4 eta_r, const V4 dt) {
+  const L3 wrel = gather3(in.omega, G.i) - gather3(in.omega, G.j);
+  const L3 wr = wrel - G.n * dot3(G.n, wrel);
+  rotate_into_plane4(mk, G.n);
+  const V4 kr = 2.25 * kn * mu_r * mu_r * G.rstar * G.rstar;
+  mk = mk - wr * (kr * dt);
+  M4 slide;
+  mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
+  // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body (I = inf) adds nothing.
+  const V4 Ii = sel(G.fi, gather(in.inertia, G.i), splat(kInfinity));
+  const V4 Ij = sel(G.fj, gather(in.inertia, G.j), splat(kInfinity));
+  const M4 wi = is_inf(Ii), wj = is_inf(Ij);
+  const V4 Ji = sel(wi, splat(0.0), Ii + G.mi * G.ri * G.ri), Jj = sel(wj, splat(0.0), Ij + G.mj * G.rj * G.rj);
+  const V4 Ir = sel(wj, Ji, sel(wi, Jj, Ji * Jj / (Ji + Jj)));
+  const L3 damped = mk - wr * (eta_r * 2.0 * sqrt4(Ir * kr));
+  // eta_r = 0 leaves the spring alone (the scalar law's branch; damped would differ from it
+  // only in the sign of a zero, or where I_r k_r is not finite).
+  return sel3(eta_r > 0.0, sel3(slide, mk, damped), mk);
 }
 
 /// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
@@ -211,8 +282,6 @@ LANES_FN void keep(const L3& h, const M4 alive, Lanes3& o) {
   _mm256_store_pd(o.y, __m256d(alive & M4(h.y)));
   _mm256_store_pd(o.z, __m256d(alive & M4(h.z)));
 }
-
-LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
 
 }  // namespace
 
@@ -269,33 +338,16 @@ __attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, 
     // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
     const V4 kt = gather(P, G.p, &LP::eight_Gstar) * a;
     L3 fs = gather3(H, G.k, &LH::fs);
-    rotate_into_plane4(fs, G.n);
-    const V4 kt_prev = gather(H, G.k, &LH::kt_prev);
-    fs = sel3((kt_prev > 0.0) & (kt < kt_prev), fs * (kt / kt_prev), fs);
-    const L3 ft = spring4(fs, G.vt, kt, dt, gather(P, G.p, &LP::damp_kt) * gamma, gather(P, G.p, &LP::mu), fc);
-    // EpsdRolling.
-    const V4 mu_r = gather(P, G.p, &LP::mu_r), eta_r = gather(P, G.p, &LP::eta_r);
-    const L3 wrel = gather3(in.omega, G.i) - gather3(in.omega, G.j);
-    const L3 wr = wrel - G.n * dot3(G.n, wrel);
+    V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+    const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, gather(P, G.p, &LP::damp_kt) * gamma,
+                               gather(P, G.p, &LP::mu), fc);
     L3 mk = gather3(H, G.k, &LH::mk);
-    rotate_into_plane4(mk, G.n);
-    const V4 kr = 2.25 * kn * mu_r * mu_r * G.rstar * G.rstar;
-    mk = mk - wr * (kr * dt);
-    M4 slide;
-    mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
-    // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body (I = inf) adds nothing.
-    const V4 Ii = sel(G.fi, gather(in.inertia, G.i), splat(kInfinity));
-    const V4 Ij = sel(G.fj, gather(in.inertia, G.j), splat(kInfinity));
-    const M4 wi = is_inf(Ii), wj = is_inf(Ij);
-    const V4 Ji = sel(wi, splat(0.0), Ii + G.mi * G.ri * G.ri), Jj = sel(wj, splat(0.0), Ij + G.mj * G.rj * G.rj);
-    const V4 Ir = sel(wj, Ji, sel(wi, Jj, Ji * Jj / (Ji + Jj)));
-    const L3 damped = mk - wr * (eta_r * 2.0 * sqrt4(Ir * kr));
-    const L3 mr = sel3(eta_r > 0.0, sel3(slide, mk, damped), mk);
+    const L3 mr = epsd4(in, G, mk, kn, fc, gather(P, G.p, &LP::mu_r), gather(P, G.p, &LP::eta_r), dt);
     put(G, g, fn, ft, &mr, a, out);
     Lanes3 s, m;
     keep(fs, alive, s);
     keep(mk, alive, m);
-    const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt)));
+    const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
     alignas(32) double kp[4];
     _mm256_store_pd(kp, __m256d(ktp));
     const int am = _mm256_movemask_pd(__m256d(alive));
@@ -306,10 +358,79 @@ __attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, 
   }
 }
 
+__attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
+                                                          const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+  const auto* const P = static_cast<const MepaEpsdLaneParams*>(in.params);
+  auto* const H = static_cast<MepaEpsdLaneHistory*>(in.hist);
+  using LP = MepaEpsdLaneParams;
+  using LH = MepaEpsdLaneHistory;
+  const V4 dt = splat(in.dt);
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
+    // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
+    // bounded below by the adhesive -A.
+    const M4 alive = G.delta > 0.0;
+    const V4 d = G.delta;
+    const V4 dn1 = sel(gather(P, G.p, &LP::n_is_1) != 0.0, splat(1.0), sqrt4(d));
+    const V4 D = d * dn1;
+    const V4 A = gather(P, G.p, &LP::kadh) * D;
+    const V4 k1 = gather(P, G.p, &LP::k1), k2 = gather(P, G.p, &LP::k2);
+    const V4 Dmax = gather(H, G.k, &LH::Dmax), Dp = gather(H, G.k, &LH::Dp);
+    const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
+    const M4 load = f2 >= f1;
+    const M4 adh = ~load & ~(f2 > -A);
+    const V4 f = sel(load, f1, sel(adh, -A, f2));
+    const V4 Dp_new = D * gather(P, G.p, &LP::plastic);
+    const V4 Dmax1 = sel(load, D, Dmax), Dp1 = sel(load, Dp_new, Dp);
+    const V4 f0 = gather(P, G.p, &LP::f0);
+    const V4 f_el = f0 + f;
+    const V4 f_adh = A - f0;
+    const V4 kn = gather(P, G.p, &LP::n) * k2 * dn1;
+    const V4 k_load = k1 * dn1;
+    // ViscousDamping.
+    const V4 gamma = gather(P, G.p, &LP::gamma_n);
+    const V4 fn = f_el + apply_limit4(gather(P, G.p, &LP::limit), gamma, G.vn, f_el);
+    const V4 fc = max0(sel(gather(P, G.p, &LP::offset) != 0.0, f_el + f_adh, f_el));  // coulomb_base
+    // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
+    const V4 kt = sel(gather(P, G.p, &LP::kt_const) != 0.0, gather(P, G.p, &LP::kt_c),
+                      gather(P, G.p, &LP::kt_ratio) * k_load * gather(P, G.p, &LP::kt_mult));
+    L3 fs = gather3(H, G.k, &LH::fs);
+    V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+    const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, gather(P, G.p, &LP::damp_t) * gamma,
+                               gather(P, G.p, &LP::mu), fc);
+    L3 mk = gather3(H, G.k, &LH::mk);
+    const L3 mr = epsd4(in, G, mk, kn, fc, gather(P, G.p, &LP::mu_r), gather(P, G.p, &LP::eta_r), dt);
+    put(G, g, fn, ft, &mr, in.want_a ? sqrt4(G.rstar * d) : splat(0.0), out);
+    Lanes3 s, m;
+    keep(fs, alive, s);
+    keep(mk, alive, m);
+    alignas(32) double kp[4], dm[4], dpl[4];
+    _mm256_store_pd(kp, _mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
+    _mm256_store_pd(dm, _mm256_and_pd(__m256d(alive), __m256d(Dmax1)));
+    _mm256_store_pd(dpl, _mm256_and_pd(__m256d(alive), __m256d(Dp1)));
+    const int am = _mm256_movemask_pd(__m256d(alive));
+    const int lm = _mm256_movemask_pd(__m256d(load)), bm = _mm256_movemask_pd(__m256d(adh));
+    for (uint32_t l = 0; l < G.valid; ++l) {
+      const bool al = (am >> l) & 1;
+      out.alive[g + l] = uint8_t(al);
+      LH& h = H[G.k[l]];
+      h.Dmax = dm[l];
+      h.Dp = dpl[l];
+      h.branch = !al ? 0 : (((lm >> l) & 1) ? 1 : (((bm >> l) & 1) ? 3 : 2));
+      h.fs = Vec3{s.x[l], s.y[l], s.z[l]};
+      h.kt_prev = kp[l];
+      h.mk = Vec3{m.x[l], m.y[l], m.z[l]};
+    }
+  }
+}
+
 #else
 
 void linear_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 void hertz_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+void mepa_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 
 #endif
 

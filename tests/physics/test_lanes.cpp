@@ -12,6 +12,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 #include "fixture.hpp"
@@ -26,7 +27,7 @@ namespace {
 
 constexpr double kL = 0.03;  // periodic cell in x and y, m
 
-enum class Law { Linear, HertzEpsd };
+enum class Law { Linear, HertzEpsd, MepaEpsd };
 
 // 500 spheres of two species dropped onto a floor in a periodic cell (gravity 200 m/s^2, to
 // settle in a few thousand steps), one in ten frozen; material pairs with parameters of
@@ -42,6 +43,18 @@ std::unique_ptr<System> make_bed(Law law, int threads) {
     const ParamSet ab = params({{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1}, {"damp_t", 0.5}});
     const ParamSet bb = params({{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}});
     s->set_model(make_contact_model("linear", "none"), {aa, ab, ab, bb});
+  } else if (law == Law::MepaEpsd) {
+    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "mepa", "epsd",
+                    params({{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
+    // a-a: n = 3/2, adhesion, the tangent kt (kt_form 0), no rolling damping; a-b: n = 1,
+    // the cohesion-offset Coulomb base, limit_damping, the secant kt (kt_form 1), rolling
+    // damping; b-b: n = 3/2, a given kt, tangential and rolling damping.
+    const ParamSet aa = params({{"k1", 1e5}, {"k2", 5e5}, {"kadh", 2e4}, {"gamma_n", 0.02}, {"mu", 0.5}, {"mu_r", 0.1}});
+    const ParamSet ab = params({{"k1", 2e3}, {"k2", 6e3}, {"kadh", 500}, {"n", 1}, {"coulomb_offset", 1}, {"gamma_n", 0.01},
+                                {"limit_damping", 1}, {"kt_form", 1}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}});
+    const ParamSet bb = params({{"k1", 5e4}, {"k2", 4e5}, {"kadh", 1e4}, {"gamma_n", 0.03}, {"kt", 800}, {"damp_t", 0.5},
+                                {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+    s->set_model(make_contact_model("mepa", "epsd"), {aa, ab, ab, bb});
   } else {
     s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", "epsd",
                     params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
@@ -132,15 +145,34 @@ Vec3 random_history(Rng& rng, const Vec3& n, double lo, double hi, size_t& small
   return rng.uniform(0, 1) < 0.125 ? Vec3{} : h;
 }
 
+// Whether s's model is LawT with every material pair on the lanes (else the comparisons
+// below would compare the scalar law with itself).
+template <class LawT>
+bool on_lanes(const System& s) {
+  const auto* m = dynamic_cast<const ContactModelImpl<LawT>*>(s.model.get());
+  if (m == nullptr) return false;
+  for (int i = 0; i < m->n(); ++i)
+    for (int j = 0; j < m->n(); ++j)
+      if (!LaneLaw<LawT>::usable(m->p(i, j))) return false;
+  return LaneLaw<LawT>::kHave;
+}
+
 // One force evaluation, scalar and in lanes, from the same state with histories set by hand
 // on every entry that touches and on some that do not (marked live: the law must end them).
 void contact_by_contact(Law law) {
   const bool was = screen_avx2_enabled();
   auto s = make_bed(law, 1);
+  ASSERT_TRUE(law == Law::Linear ? on_lanes<LinearLaw>(*s)
+              : law == Law::HertzEpsd ? on_lanes<HertzEpsdLaw>(*s) : on_lanes<MepaEpsdLaw>(*s));
   s->run(3000);  // settling: contacts with histories, frozen partners, images
   auto& nl = s->nl;
-  const size_t stride = s->model->state_size();  // fs at 0; Hertz-Mindlin: kt_prev at 24, mk at 32
-  ASSERT_EQ(stride, law == Law::Linear ? sizeof(LinearLaneHistory) : sizeof(HertzEpsdLaneHistory));
+  // The records (lanes.hpp): fs, then kt_prev and mk with rolling; MEPA: Dmax, Dp, branch first.
+  const size_t stride = s->model->state_size();
+  const size_t o_fs = law == Law::MepaEpsd ? offsetof(MepaEpsdLaneHistory, fs) : 0;
+  ASSERT_EQ(stride, law == Law::Linear     ? sizeof(LinearLaneHistory)
+                    : law == Law::HertzEpsd ? sizeof(HertzEpsdLaneHistory)
+                                            : sizeof(MepaEpsdLaneHistory));
+  const bool rolling = law != Law::Linear;
   ASSERT_GE(nl.hist.data.size(), nl.jdx.size() * stride);
   const auto& P = s->particles;
   auto rec = [&](std::vector<std::byte>& d, size_t k) { return d.data() + k * stride; };
@@ -155,15 +187,23 @@ void contact_by_contact(Law law) {
       const Vec3 d = P.x[i] - (P.x[j] + nl.shift[nl.image[k]]);
       const double dist = std::sqrt(norm2(d));
       const bool touch = dist < P.radius[i] + P.radius[j];
-      if (!touch && rng.uniform(0, 1) > 0.05) continue;
+      if (!touch && rng.uniform(0, 1) > 0.15) continue;
       const Vec3 n = d * (1.0 / dist);
       const Vec3 fs = random_history(rng, n, -9, 0, small_turn);
-      std::memcpy(rec(nl.hist.data, k), &fs, sizeof fs);
-      if (law == Law::HertzEpsd) {
+      std::memcpy(rec(nl.hist.data, k) + o_fs, &fs, sizeof fs);
+      if (rolling) {
         const double kt_prev = rng.uniform(0, 1) < 0.3 ? 0.0 : std::pow(10.0, rng.uniform(1, 4));
         const Vec3 mk = random_history(rng, n, -12, -5, small_turn);
-        std::memcpy(rec(nl.hist.data, k) + 24, &kt_prev, sizeof kt_prev);
-        std::memcpy(rec(nl.hist.data, k) + 32, &mk, sizeof mk);
+        std::memcpy(rec(nl.hist.data, k) + o_fs + 24, &kt_prev, sizeof kt_prev);
+        std::memcpy(rec(nl.hist.data, k) + o_fs + 32, &mk, sizeof mk);
+      }
+      if (law == Law::MepaEpsd && touch) {
+        // A plastic overlap of 0 to 1.5 delta^n (loading, un/reloading and the adhesive
+        // branch all reached), its largest overlap at or above it.
+        const double D = std::pow(P.radius[i] + P.radius[j] - dist, P.species[i] + P.species[j] == 1 ? 1.0 : 1.5);
+        const double Dp = rng.uniform(0, 1.5) * D, Dmax = Dp * rng.uniform(1, 3);
+        std::memcpy(rec(nl.hist.data, k), &Dmax, sizeof Dmax);
+        std::memcpy(rec(nl.hist.data, k) + 8, &Dp, sizeof Dp);
       }
       nl.hist.live[k] = 1;
       touching += touch;
@@ -188,43 +228,51 @@ void contact_by_contact(Law law) {
   // Coverage: the bed must reach what it is meant to. A spring cut to its limit is at least
   // halved here (sliding); a stiffness that fell scales the spring by kt/kt_prev.
   std::vector<std::byte> h0 = hist0;
-  size_t slid = 0, rolled = 0, softened = 0;
+  size_t slid = 0, rolled = 0, softened = 0, branch[4] = {0, 0, 0, 0};
   for (size_t k = 0; k < nl.jdx.size(); ++k) {
     if (!a.live[k]) continue;
     Vec3 f0k, f1k;
-    std::memcpy(&f0k, rec(h0, k), sizeof f0k);
-    std::memcpy(&f1k, rec(a.hist, k), sizeof f1k);
+    std::memcpy(&f0k, rec(h0, k) + o_fs, sizeof f0k);
+    std::memcpy(&f1k, rec(a.hist, k) + o_fs, sizeof f1k);
     slid += norm2(f1k) < 0.25 * norm2(f0k);
-    if (law == Law::HertzEpsd) {
+    if (rolling) {
       Vec3 m0k, m1k;
       double kp0, kp1;
-      std::memcpy(&m0k, rec(h0, k) + 32, sizeof m0k);
-      std::memcpy(&m1k, rec(a.hist, k) + 32, sizeof m1k);
-      std::memcpy(&kp0, rec(h0, k) + 24, sizeof kp0);
-      std::memcpy(&kp1, rec(a.hist, k) + 24, sizeof kp1);
+      std::memcpy(&m0k, rec(h0, k) + o_fs + 32, sizeof m0k);
+      std::memcpy(&m1k, rec(a.hist, k) + o_fs + 32, sizeof m1k);
+      std::memcpy(&kp0, rec(h0, k) + o_fs + 24, sizeof kp0);
+      std::memcpy(&kp1, rec(a.hist, k) + o_fs + 24, sizeof kp1);
       rolled += norm2(m1k) < 0.25 * norm2(m0k);
       softened += kp0 > kp1 && kp1 > 0;
     }
+    if (law == Law::MepaEpsd) {
+      int32_t br;
+      std::memcpy(&br, rec(a.hist, k) + 16, sizeof br);
+      ++branch[br & 3];
+    }
   }
   std::printf("[info] lanes: %zu touching, %zu parted, %zu small turns, %zu frozen partners, %zu sliding, "
-              "%zu rolling springs cut, %zu stiffnesses fallen\n",
-              touching, parted, small_turn, frozen_partner, slid, rolled, softened);
+              "%zu rolling springs cut, %zu stiffnesses fallen, MEPA branches %zu/%zu/%zu\n",
+              touching, parted, small_turn, frozen_partner, slid, rolled, softened, branch[1], branch[2], branch[3]);
   EXPECT_GT(touching, 500u);
   EXPECT_GT(parted, 20u);
   EXPECT_GT(small_turn, 100u);
   EXPECT_GT(frozen_partner, 20u);
   EXPECT_GT(slid, 100u);
-  if (law == Law::HertzEpsd) {
+  if (rolling) {
     EXPECT_GT(rolled, 100u);
     EXPECT_GT(softened, 100u);
   }
+  if (law == Law::MepaEpsd)
+    for (int b = 1; b <= 3; ++b) EXPECT_GT(branch[b], 50u) << "MEPA branch " << b;
   // Bit for bit (memcmp: the sign of a zero counts).
   EXPECT_EQ(differing(a.f, b.f), 0u);
   EXPECT_EQ(differing(a.t, b.t), 0u);
   EXPECT_TRUE(a.live == b.live);
   EXPECT_TRUE(a.hist == b.hist);
-  report(law == Law::Linear ? "lanes vs scalar, linear: particles with any differing force or torque bit"
-                            : "lanes vs scalar, Hertz-Mindlin + EPSD: particles with any differing force or torque bit",
+  report(law == Law::Linear      ? "lanes vs scalar, linear: particles with any differing force or torque bit"
+         : law == Law::HertzEpsd ? "lanes vs scalar, Hertz-Mindlin + EPSD: particles with any differing force or torque bit"
+                                 : "lanes vs scalar, MEPA + EPSD: particles with any differing force or torque bit",
          double(differing(a.f, b.f) + differing(a.t, b.t)), 0.0, 0, "==");
 }
 
@@ -269,4 +317,29 @@ TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
 TEST(Lanes, HertzMindlinEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
   if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   whole_runs(Law::HertzEpsd);
+}
+
+TEST(Lanes, MepaEpsdContactByContactAsTheScalarLaw) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  contact_by_contact(Law::MepaEpsd);
+}
+
+TEST(Lanes, MepaEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
+  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  whole_runs(Law::MepaEpsd);
+}
+
+TEST(Lanes, MepaSettingsOutsideTheLanesRunTheScalarLaw) {
+  // dp_shift and exponents other than 1 and 3/2 are the scalar law's alone (lane_usable).
+  for (const auto& extra : {std::pair{"dp_shift", 1.0}, std::pair{"n", 2.0}, std::pair{"n", 1.25}}) {
+    auto s = make_system({{"a", 2500, 0, 0}}, "mepa", "epsd", params({{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}),
+                         5e-6);
+    ParamSet p = params({{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}});
+    p.set(extra.first, extra.second);
+    s->set_model(make_contact_model("mepa", "epsd"), {p});
+    EXPECT_FALSE(on_lanes<MepaEpsdLaw>(*s)) << extra.first << " = " << extra.second;
+  }
+  auto s = make_system({{"a", 2500, 0, 0}}, "mepa", "epsd", params({{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}),
+                       5e-6);
+  EXPECT_TRUE(on_lanes<MepaEpsdLaw>(*s));
 }
