@@ -102,6 +102,14 @@ LANES_FN V4 gather(const T* __restrict p, const uint32_t* idx, double T::*m) {
   return V4{p[idx[0]].*m, p[idx[1]].*m, p[idx[2]].*m, p[idx[3]].*m};
 }
 
+/// A material pair's parameter m in each lane: one broadcast where all four lanes share the
+/// pair (kU; one material, or the chute's flowing spheres among themselves), else gathered.
+template <bool kU, class T>
+LANES_FN V4 par(const T* __restrict P, const uint32_t* p, double T::*m) {
+  if constexpr (kU) return splat(P[p[0]].*m);
+  else return gather(P, p, m);
+}
+
 struct L3 { V4 x, y, z; };
 LANES_FN L3 operator-(const L3& a, const L3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 LANES_FN L3 operator+(const L3& a, const L3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
@@ -135,8 +143,9 @@ LANES_FN L3 gather3(const Vec3* __restrict p, const uint32_t* idx) {
 struct Group {
   uint32_t hh[4], k[4], i[4], j[4], p[4];
   uint32_t valid;  ///< lanes that hold a contact of the chunk
+  bool uniform;    ///< all four lanes of one material pair (its parameters broadcast)
   M4 fi, fj;       ///< i, j free (not frozen)
-  L3 n, vt;
+  L3 n, vt, wi, wj;  ///< wi, wj: the spins
   V4 ri, rj, delta, rstar, mi, mj, mstar, vn, li, lj;
 };
 
@@ -150,6 +159,7 @@ LANES_FN void geometry(const LaneInput& in, const ScreenHits& hits, const uint32
     G.p[l] = uint32_t(size_t(in.species[G.i[l]]) * in.nmat + size_t(in.species[G.j[l]]));
   }
   G.valid = std::min(4u, cnt - g);
+  G.uniform = G.p[0] == G.p[1] && G.p[0] == G.p[2] && G.p[0] == G.p[3];
   const uint8_t* const flag = in.flag;
   G.fi = M4{-(flag[G.i[0]] == kFree), -(flag[G.i[1]] == kFree), -(flag[G.i[2]] == kFree), -(flag[G.i[3]] == kFree)};
   G.fj = M4{-(flag[G.j[0]] == kFree), -(flag[G.j[1]] == kFree), -(flag[G.j[2]] == kFree), -(flag[G.j[3]] == kFree)};
@@ -168,7 +178,9 @@ LANES_FN void geometry(const LaneInput& in, const ScreenHits& hits, const uint32
   G.vn = dot3(vij, G.n);
   G.li = G.ri - 0.5 * G.delta;
   G.lj = G.rj - 0.5 * G.delta;
-  const L3 w = gather3(in.omega, G.i) * G.li + gather3(in.omega, G.j) * G.lj;
+  G.wi = gather3(in.omega, G.i);
+  G.wj = gather3(in.omega, G.j);
+  const L3 w = G.wi * G.li + G.wj * G.lj;
   const L3 vrel = vij - cross3(w, G.n);
   G.vt = vrel - G.n * dot3(vrel, G.n);
 }
@@ -235,7 +247,7 @@ LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
 /// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
 LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, const V4 fc, const V4 mu_r,
                   const V4 eta_r, const V4 dt) {
-  const L3 wrel = gather3(in.omega, G.i) - gather3(in.omega, G.j);
+  const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
   rotate_into_plane4(mk, G.n);
   const V4 kr = 2.25 * kn * mu_r * mu_r * G.rstar * G.rstar;
@@ -285,144 +297,186 @@ LANES_FN void keep(const L3& h, const M4 alive, Lanes3& o) {
 
 }  // namespace
 
-__attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
-                                                       const uint32_t cnt, LaneOut& out) {
+namespace {
+
+/// One group of four contacts of the linear law (after their geometry); kU: one material pair.
+template <bool kU>
+__attribute__((target("avx2"), always_inline)) inline void linear_group(
+    const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const auto* const P = static_cast<const LinearLaneParams*>(in.params);
   auto* const H = static_cast<LinearLaneHistory*>(in.hist);
   using LP = LinearLaneParams;
-  for (uint32_t g = 0; g < cnt; g += 4) {
-    Group G;
-    geometry(in, hits, h0, cnt, g, G);
-    // LinearNormal.
-    const V4 kn = gather(P, G.p, &LP::kn);
-    const M4 alive = G.delta > 0.0;
-    const V4 f_el = kn * G.delta;
-    V4 gamma;
-    const V4 fn = f_el + damping4(gather(P, G.p, &LP::two_beta), gather(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
-    const V4 fc = max0(fn);  // NormalBase::coulomb_base
-    // LinearTangential: kt fixed per material pair.
-    L3 fs = gather3(H, G.k, &LinearLaneHistory::fs);
-    rotate_into_plane4(fs, G.n);
-    const L3 ft = spring4(fs, G.vt, gather(P, G.p, &LP::kt), splat(in.dt), gather(P, G.p, &LP::damp_t) * gamma,
-                          gather(P, G.p, &LP::mu), fc);
-    // LinearNormal's contact radius, read only when asked for.
-    put(G, g, fn, ft, nullptr, in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0), out);
-    Lanes3 s;
-    keep(fs, alive, s);
-    const int am = _mm256_movemask_pd(__m256d(alive));
-    for (uint32_t l = 0; l < G.valid; ++l) {
-      out.alive[g + l] = uint8_t((am >> l) & 1);
-      H[G.k[l]].fs = Vec3{s.x[l], s.y[l], s.z[l]};
-    }
+  // LinearNormal.
+  const V4 kn = par<kU>(P, G.p, &LP::kn);
+  const M4 alive = G.delta > 0.0;
+  const V4 f_el = kn * G.delta;
+  V4 gamma;
+  const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+  const V4 fc = max0(fn);  // NormalBase::coulomb_base
+  // LinearTangential: kt fixed per material pair.
+  L3 fs = gather3(H, G.k, &LinearLaneHistory::fs);
+  rotate_into_plane4(fs, G.n);
+  const L3 ft = spring4(fs, G.vt, par<kU>(P, G.p, &LP::kt), splat(in.dt), par<kU>(P, G.p, &LP::damp_t) * gamma,
+                        par<kU>(P, G.p, &LP::mu), fc);
+  // LinearNormal's contact radius, read only when asked for.
+  put(G, g, fn, ft, nullptr, in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0), out);
+  Lanes3 s;
+  keep(fs, alive, s);
+  const int am = _mm256_movemask_pd(__m256d(alive));
+  for (uint32_t l = 0; l < G.valid; ++l) {
+    out.alive[g + l] = uint8_t((am >> l) & 1);
+    H[G.k[l]].fs = Vec3{s.x[l], s.y[l], s.z[l]};
   }
 }
 
-__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
-                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+}  // namespace
+
+__attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
+                                                       const uint32_t cnt, LaneOut& out) {
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    if (G.uniform)
+      linear_group<true>(in, G, g, out);
+    else
+      linear_group<false>(in, G, g, out);
+  }
+}
+
+namespace {
+
+/// One group of four contacts of Hertz-Mindlin + EPSD (after their geometry); kU: one material pair.
+template <bool kU>
+__attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
+    const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const auto* const P = static_cast<const HertzEpsdLaneParams*>(in.params);
   auto* const H = static_cast<HertzEpsdLaneHistory*>(in.hist);
   using LP = HertzEpsdLaneParams;
   using LH = HertzEpsdLaneHistory;
   const V4 dt = splat(in.dt);
-  for (uint32_t g = 0; g < cnt; g += 4) {
-    Group G;
-    geometry(in, hits, h0, cnt, g, G);
-    // HertzNormal (the lanes of ended contacts compute what no one reads).
-    const M4 alive = G.delta > 0.0;
-    const V4 a = sqrt4(G.rstar * G.delta);
-    const V4 kn = gather(P, G.p, &LP::two_Estar) * a;
-    const V4 f_el = (2.0 / 3.0) * kn * G.delta;
-    V4 gamma;
-    const V4 fn = f_el + damping4(gather(P, G.p, &LP::two_beta), gather(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
-    const V4 fc = max0(fn);
-    // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
-    const V4 kt = gather(P, G.p, &LP::eight_Gstar) * a;
-    L3 fs = gather3(H, G.k, &LH::fs);
-    V4 kt_prev = gather(H, G.k, &LH::kt_prev);
-    const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, gather(P, G.p, &LP::damp_kt) * gamma,
-                               gather(P, G.p, &LP::mu), fc);
-    L3 mk = gather3(H, G.k, &LH::mk);
-    const L3 mr = epsd4(in, G, mk, kn, fc, gather(P, G.p, &LP::mu_r), gather(P, G.p, &LP::eta_r), dt);
-    put(G, g, fn, ft, &mr, a, out);
-    Lanes3 s, m;
-    keep(fs, alive, s);
-    keep(mk, alive, m);
-    const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
-    alignas(32) double kp[4];
-    _mm256_store_pd(kp, __m256d(ktp));
-    const int am = _mm256_movemask_pd(__m256d(alive));
-    for (uint32_t l = 0; l < G.valid; ++l) {
-      out.alive[g + l] = uint8_t((am >> l) & 1);
-      H[G.k[l]] = LH{Vec3{s.x[l], s.y[l], s.z[l]}, kp[l], Vec3{m.x[l], m.y[l], m.z[l]}};
-    }
+  // HertzNormal (the lanes of ended contacts compute what no one reads).
+  const M4 alive = G.delta > 0.0;
+  const V4 a = sqrt4(G.rstar * G.delta);
+  const V4 kn = par<kU>(P, G.p, &LP::two_Estar) * a;
+  const V4 f_el = (2.0 / 3.0) * kn * G.delta;
+  V4 gamma;
+  const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+  const V4 fc = max0(fn);
+  // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
+  const V4 kt = par<kU>(P, G.p, &LP::eight_Gstar) * a;
+  L3 fs = gather3(H, G.k, &LH::fs);
+  V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_kt) * gamma,
+                             par<kU>(P, G.p, &LP::mu), fc);
+  L3 mk = gather3(H, G.k, &LH::mk);
+  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::eta_r), dt);
+  put(G, g, fn, ft, &mr, a, out);
+  Lanes3 s, m;
+  keep(fs, alive, s);
+  keep(mk, alive, m);
+  const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
+  alignas(32) double kp[4];
+  _mm256_store_pd(kp, __m256d(ktp));
+  const int am = _mm256_movemask_pd(__m256d(alive));
+  for (uint32_t l = 0; l < G.valid; ++l) {
+    out.alive[g + l] = uint8_t((am >> l) & 1);
+    H[G.k[l]] = LH{Vec3{s.x[l], s.y[l], s.z[l]}, kp[l], Vec3{m.x[l], m.y[l], m.z[l]}};
   }
 }
 
-__attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
-                                                          const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+}  // namespace
+
+__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
+                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    if (G.uniform)
+      hertz_epsd_group<true>(in, G, g, out);
+    else
+      hertz_epsd_group<false>(in, G, g, out);
+  }
+}
+
+namespace {
+
+/// One group of four contacts of MEPA + EPSD (after their geometry); kU: one material pair.
+template <bool kU>
+__attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
+    const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const auto* const P = static_cast<const MepaEpsdLaneParams*>(in.params);
   auto* const H = static_cast<MepaEpsdLaneHistory*>(in.hist);
   using LP = MepaEpsdLaneParams;
   using LH = MepaEpsdLaneHistory;
   const V4 dt = splat(in.dt);
+  // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
+  // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
+  // bounded below by the adhesive -A.
+  const M4 alive = G.delta > 0.0;
+  const V4 d = G.delta;
+  const V4 dn1 = sel(par<kU>(P, G.p, &LP::n_is_1) != 0.0, splat(1.0), sqrt4(d));
+  const V4 D = d * dn1;
+  const V4 A = par<kU>(P, G.p, &LP::kadh) * D;
+  const V4 k1 = par<kU>(P, G.p, &LP::k1), k2 = par<kU>(P, G.p, &LP::k2);
+  const V4 Dmax = gather(H, G.k, &LH::Dmax), Dp = gather(H, G.k, &LH::Dp);
+  const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
+  const M4 load = f2 >= f1;
+  const M4 adh = ~load & ~(f2 > -A);
+  const V4 f = sel(load, f1, sel(adh, -A, f2));
+  const V4 Dp_new = D * par<kU>(P, G.p, &LP::plastic);
+  const V4 Dmax1 = sel(load, D, Dmax), Dp1 = sel(load, Dp_new, Dp);
+  const V4 f0 = par<kU>(P, G.p, &LP::f0);
+  const V4 f_el = f0 + f;
+  const V4 f_adh = A - f0;
+  const V4 kn = par<kU>(P, G.p, &LP::n) * k2 * dn1;
+  const V4 k_load = k1 * dn1;
+  // ViscousDamping.
+  const V4 gamma = par<kU>(P, G.p, &LP::gamma_n);
+  const V4 fn = f_el + apply_limit4(par<kU>(P, G.p, &LP::limit), gamma, G.vn, f_el);
+  const V4 fc = max0(sel(par<kU>(P, G.p, &LP::offset) != 0.0, f_el + f_adh, f_el));  // coulomb_base
+  // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
+  const V4 kt = sel(par<kU>(P, G.p, &LP::kt_const) != 0.0, par<kU>(P, G.p, &LP::kt_c),
+                    par<kU>(P, G.p, &LP::kt_ratio) * k_load * par<kU>(P, G.p, &LP::kt_mult));
+  L3 fs = gather3(H, G.k, &LH::fs);
+  V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_t) * gamma,
+                             par<kU>(P, G.p, &LP::mu), fc);
+  L3 mk = gather3(H, G.k, &LH::mk);
+  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::eta_r), dt);
+  put(G, g, fn, ft, &mr, in.want_a ? sqrt4(G.rstar * d) : splat(0.0), out);
+  Lanes3 s, m;
+  keep(fs, alive, s);
+  keep(mk, alive, m);
+  alignas(32) double kp[4], dm[4], dpl[4];
+  _mm256_store_pd(kp, _mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
+  _mm256_store_pd(dm, _mm256_and_pd(__m256d(alive), __m256d(Dmax1)));
+  _mm256_store_pd(dpl, _mm256_and_pd(__m256d(alive), __m256d(Dp1)));
+  const int am = _mm256_movemask_pd(__m256d(alive));
+  const int lm = _mm256_movemask_pd(__m256d(load)), bm = _mm256_movemask_pd(__m256d(adh));
+  for (uint32_t l = 0; l < G.valid; ++l) {
+    const bool al = (am >> l) & 1;
+    out.alive[g + l] = uint8_t(al);
+    LH& h = H[G.k[l]];
+    h.Dmax = dm[l];
+    h.Dp = dpl[l];
+    h.branch = !al ? 0 : (((lm >> l) & 1) ? 1 : (((bm >> l) & 1) ? 3 : 2));
+    h.fs = Vec3{s.x[l], s.y[l], s.z[l]};
+    h.kt_prev = kp[l];
+    h.mk = Vec3{m.x[l], m.y[l], m.z[l]};
+  }
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
+                                                          const uint32_t h0, const uint32_t cnt, LaneOut& out) {
   for (uint32_t g = 0; g < cnt; g += 4) {
     Group G;
     geometry(in, hits, h0, cnt, g, G);
-    // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
-    // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
-    // bounded below by the adhesive -A.
-    const M4 alive = G.delta > 0.0;
-    const V4 d = G.delta;
-    const V4 dn1 = sel(gather(P, G.p, &LP::n_is_1) != 0.0, splat(1.0), sqrt4(d));
-    const V4 D = d * dn1;
-    const V4 A = gather(P, G.p, &LP::kadh) * D;
-    const V4 k1 = gather(P, G.p, &LP::k1), k2 = gather(P, G.p, &LP::k2);
-    const V4 Dmax = gather(H, G.k, &LH::Dmax), Dp = gather(H, G.k, &LH::Dp);
-    const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
-    const M4 load = f2 >= f1;
-    const M4 adh = ~load & ~(f2 > -A);
-    const V4 f = sel(load, f1, sel(adh, -A, f2));
-    const V4 Dp_new = D * gather(P, G.p, &LP::plastic);
-    const V4 Dmax1 = sel(load, D, Dmax), Dp1 = sel(load, Dp_new, Dp);
-    const V4 f0 = gather(P, G.p, &LP::f0);
-    const V4 f_el = f0 + f;
-    const V4 f_adh = A - f0;
-    const V4 kn = gather(P, G.p, &LP::n) * k2 * dn1;
-    const V4 k_load = k1 * dn1;
-    // ViscousDamping.
-    const V4 gamma = gather(P, G.p, &LP::gamma_n);
-    const V4 fn = f_el + apply_limit4(gather(P, G.p, &LP::limit), gamma, G.vn, f_el);
-    const V4 fc = max0(sel(gather(P, G.p, &LP::offset) != 0.0, f_el + f_adh, f_el));  // coulomb_base
-    // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
-    const V4 kt = sel(gather(P, G.p, &LP::kt_const) != 0.0, gather(P, G.p, &LP::kt_c),
-                      gather(P, G.p, &LP::kt_ratio) * k_load * gather(P, G.p, &LP::kt_mult));
-    L3 fs = gather3(H, G.k, &LH::fs);
-    V4 kt_prev = gather(H, G.k, &LH::kt_prev);
-    const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, gather(P, G.p, &LP::damp_t) * gamma,
-                               gather(P, G.p, &LP::mu), fc);
-    L3 mk = gather3(H, G.k, &LH::mk);
-    const L3 mr = epsd4(in, G, mk, kn, fc, gather(P, G.p, &LP::mu_r), gather(P, G.p, &LP::eta_r), dt);
-    put(G, g, fn, ft, &mr, in.want_a ? sqrt4(G.rstar * d) : splat(0.0), out);
-    Lanes3 s, m;
-    keep(fs, alive, s);
-    keep(mk, alive, m);
-    alignas(32) double kp[4], dm[4], dpl[4];
-    _mm256_store_pd(kp, _mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
-    _mm256_store_pd(dm, _mm256_and_pd(__m256d(alive), __m256d(Dmax1)));
-    _mm256_store_pd(dpl, _mm256_and_pd(__m256d(alive), __m256d(Dp1)));
-    const int am = _mm256_movemask_pd(__m256d(alive));
-    const int lm = _mm256_movemask_pd(__m256d(load)), bm = _mm256_movemask_pd(__m256d(adh));
-    for (uint32_t l = 0; l < G.valid; ++l) {
-      const bool al = (am >> l) & 1;
-      out.alive[g + l] = uint8_t(al);
-      LH& h = H[G.k[l]];
-      h.Dmax = dm[l];
-      h.Dp = dpl[l];
-      h.branch = !al ? 0 : (((lm >> l) & 1) ? 1 : (((bm >> l) & 1) ? 3 : 2));
-      h.fs = Vec3{s.x[l], s.y[l], s.z[l]};
-      h.kt_prev = kp[l];
-      h.mk = Vec3{m.x[l], m.y[l], m.z[l]};
-    }
+    if (G.uniform)
+      mepa_epsd_group<true>(in, G, g, out);
+    else
+      mepa_epsd_group<false>(in, G, g, out);
   }
 }
 
