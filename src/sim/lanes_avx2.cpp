@@ -242,6 +242,21 @@ LANES_FN L3 spring_prev4(L3& fs, V4& kt_prev, const L3& n, const L3& vt, const V
   return spring4(fs, vt, kt, dt, gamma_t, mu, fc);
 }
 
+/// Evaluates the chunk's groups with Group's kU: the uniform variant where one material pair
+/// fills the group, else the mixed one.
+using GroupFn = void (*)(const LaneInput&, const Group&, uint32_t, LaneOut&);
+template <GroupFn kUniform, GroupFn kMixed>
+LANES_FN void drive(const LaneInput& in, const ScreenHits& hits, const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+  for (uint32_t g = 0; g < cnt; g += 4) {
+    Group G;
+    geometry(in, hits, h0, cnt, g, G);
+    if (G.uniform)
+      kUniform(in, G, g, out);
+    else
+      kMixed(in, G, g, out);
+  }
+}
+
 LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
 
 /// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
@@ -333,14 +348,7 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
 
 __attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
                                                        const uint32_t cnt, LaneOut& out) {
-  for (uint32_t g = 0; g < cnt; g += 4) {
-    Group G;
-    geometry(in, hits, h0, cnt, g, G);
-    if (G.uniform)
-      linear_group<true>(in, G, g, out);
-    else
-      linear_group<false>(in, G, g, out);
-  }
+  drive<linear_group<true>, linear_group<false>>(in, hits, h0, cnt, out);
 }
 
 namespace {
@@ -388,14 +396,7 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
 
 __attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
                                                            const uint32_t h0, const uint32_t cnt, LaneOut& out) {
-  for (uint32_t g = 0; g < cnt; g += 4) {
-    Group G;
-    geometry(in, hits, h0, cnt, g, G);
-    if (G.uniform)
-      hertz_epsd_group<true>(in, G, g, out);
-    else
-      hertz_epsd_group<false>(in, G, g, out);
-  }
+  drive<hertz_epsd_group<true>, hertz_epsd_group<false>>(in, hits, h0, cnt, out);
 }
 
 namespace {
@@ -470,14 +471,7 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
 
 __attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
-  for (uint32_t g = 0; g < cnt; g += 4) {
-    Group G;
-    geometry(in, hits, h0, cnt, g, G);
-    if (G.uniform)
-      mepa_epsd_group<true>(in, G, g, out);
-    else
-      mepa_epsd_group<false>(in, G, g, out);
-  }
+  drive<mepa_epsd_group<true>, mepa_epsd_group<false>>(in, hits, h0, cnt, out);
 }
 
 #else

@@ -124,5 +124,7 @@ uint32_t screen_avx2(const ScreenInput& s, long i0, long i1, long b, uint32_t kb
 bool screen_avx2_enabled();
 /// Overrides the choice (tests: both paths on one machine); call it between runs, not during one.
 void set_screen_avx2(bool on);
+/// Whether this CPU and build have the AVX2 paths at all, whatever COHDEM_SIMD says.
+bool avx2_available();
 
 }  // namespace cohdem

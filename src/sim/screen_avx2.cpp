@@ -181,6 +181,7 @@ bool screen_avx2_enabled() {
 }
 
 void set_screen_avx2(const bool on) { g_avx2 = (on && __builtin_cpu_supports("avx2")) ? 1 : 0; }
+bool avx2_available() { return __builtin_cpu_supports("avx2"); }
 
 #else
 
@@ -190,6 +191,7 @@ uint32_t screen_avx2(const ScreenInput& s, const long i0, const long i1, const l
 }
 bool screen_avx2_enabled() { return false; }
 void set_screen_avx2(bool) { g_avx2 = 0; }
+bool avx2_available() { return false; }
 
 #endif
 

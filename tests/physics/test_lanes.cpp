@@ -122,14 +122,6 @@ size_t differing(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return d;
 }
 
-bool avx2_here() {
-  const bool was = screen_avx2_enabled();
-  set_screen_avx2(true);
-  const bool ok = screen_avx2_enabled();
-  set_screen_avx2(was);
-  return ok;
-}
-
 
 // A random history vector for an entry of normal n: a random direction (most lie out of the
 // tangent plane by large angles: the exact rescaling), or three in ten nearly in the plane (a
@@ -300,32 +292,32 @@ void whole_runs(Law law) {
 }  // namespace
 
 TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   contact_by_contact(Law::Linear);
 }
 
 TEST(Lanes, HertzMindlinEpsdContactByContactAsTheScalarLaw) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   contact_by_contact(Law::HertzEpsd);
 }
 
 TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   whole_runs(Law::Linear);
 }
 
 TEST(Lanes, HertzMindlinEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   whole_runs(Law::HertzEpsd);
 }
 
 TEST(Lanes, MepaEpsdContactByContactAsTheScalarLaw) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   contact_by_contact(Law::MepaEpsd);
 }
 
 TEST(Lanes, MepaEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
   whole_runs(Law::MepaEpsd);
 }
 

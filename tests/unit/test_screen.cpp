@@ -67,16 +67,6 @@ struct RandomList {
   }
 };
 
-/// Whether this CPU and build have the AVX2 screening (whatever COHDEM_SIMD says: these tests
-/// call it directly).
-bool avx2_here() {
-  const bool was = screen_avx2_enabled();
-  set_screen_avx2(true);
-  const bool ok = screen_avx2_enabled();
-  set_screen_avx2(was);
-  return ok;
-}
-
 /// Runs both screenings on one batch; returns the number of entries picked (both agree).
 uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uint32_t ke) {
   ScreenHits a, v;
@@ -106,7 +96,7 @@ uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uin
 }  // namespace
 
 TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
-  if (!avx2_here()) GTEST_SKIP() << "this CPU or build has no AVX2 screening (not x86-64 with AVX2)";
+  if (!avx2_available()) GTEST_SKIP() << "this CPU or build has no AVX2 screening (not x86-64 with AVX2)";
   uint64_t picked = 0, batches = 0, shifted_hits = 0;
   for (uint64_t seed = 1; seed <= 20; ++seed) {
     RandomList L(seed);
@@ -137,7 +127,7 @@ TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
 }
 
 TEST(Screening, ListEndScreenedSingly) {
-  if (!avx2_here()) GTEST_SKIP() << "no AVX2 screening here";
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 screening here";
   // Lists of 1 to 9 entries in one row: the AVX2 path reads groups of four only inside the list.
   for (uint32_t len = 1; len <= 9; ++len) {
     RandomList L(100 + len, 4);
