@@ -4,7 +4,8 @@
 // Pass 1 (row i): the entries of i's row that touch or are live are picked first (branch-
 //   free screening, a batch of kBatch entries of consecutive rows at a time; scalar, or four
 //   entries at a time in AVX2 registers where the CPU has them: sim/screen.hpp), then evaluated
-//   (one loop over the batch's contacts); the forces and torques on i are summed in list order
+//   (one loop over the batch's contacts; for the laws that have them, four contacts at a time
+//   in AVX2 lanes, sim/lanes.hpp, with the same results); the forces and torques on i are summed in list order
 //   straight into particle i, and what j receives (the force on i, whose opposite j takes,
 //   and the torque on j) goes to per-pair buffers (one thread: only when asked for,
 //   ForceContext::keep_pair; the row sweep scatters j's share itself).
@@ -102,15 +103,17 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const size_t nmat = size_t(n_);
   // The lanes' reading of the material pairs' parameters (laws with lanes only: sim/lanes.hpp;
   // a few entries, built per call).
+  // Null when a material pair's settings are not the lanes' (then the scalar law runs).
   using Lanes = LaneLaw<Law>;
   std::vector<typename Lanes::Params> lane_table;
+  bool lanes_usable = Lanes::kHave;
   if constexpr (Lanes::kHave) {
     lane_table.reserve(params_.size());
-    for (const Params& q : params_) lane_table.push_back(lane_params(q));
+    for (const Params& q : params_) {
+      lane_table.push_back(lane_params(q));
+      lanes_usable = lanes_usable && Lanes::usable(q);
+    }
   }
-  bool lanes_usable = Lanes::kHave;
-  if constexpr (Lanes::kHave)
-    for (const Params& q : params_) lanes_usable = lanes_usable && Lanes::usable(q);
   const void* const lane_p = lanes_usable ? lane_table.data() : nullptr;
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
@@ -226,8 +229,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           if (a_pair) a_pair[k] = ca;
         }
       };
-      // Laws with lanes (sim/lanes.hpp: the linear law, Hertz-Mindlin with EPSD rolling):
-      // their contacts four at a time in AVX2 lanes (the same results bit for bit),
+      // Laws with lanes (sim/lanes.hpp: the linear law, Hertz-Mindlin and MEPA with EPSD
+      // rolling): their contacts four at a time in AVX2 lanes (the same results bit for bit),
       // kLaneChunk per call, whose results are then added one contact at a time in list
       // order. The next chunk's records are asked for while one is evaluated.
       if constexpr (Lanes::kHave) {

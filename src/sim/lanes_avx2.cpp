@@ -6,7 +6,6 @@
 #include "sim/lanes.hpp"
 
 #include <algorithm>
-#include <cstring>
 #include <limits>
 
 #include "particles/particle_store.hpp"
@@ -120,10 +119,9 @@ LANES_FN L3 cross3(const L3& a, const L3& b) {
 }
 LANES_FN L3 sel3(const M4 m, const L3& a, const L3& b) { return {sel(m, a.x, b.x), sel(m, a.y, b.y), sel(m, a.z, b.z)}; }
 
-/// x, y, z of four Vec3s, the Vec3 member m of records p[idx[0..3]], one lane each.
-template <class T>
-LANES_FN L3 gather3(const T* __restrict p, const uint32_t* idx, Vec3 T::*m) {
-  const Vec3* a[4] = {&(p[idx[0]].*m), &(p[idx[1]].*m), &(p[idx[2]].*m), &(p[idx[3]].*m)};
+/// x, y, z of the Vec3s *a[0..3], one lane each (two 16-byte loads, two inserts and two
+/// unpacks for x and y).
+LANES_FN L3 load3(const Vec3* const* a) {
   const __m256d t0 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&a[0]->x)), _mm_loadu_pd(&a[2]->x), 1);
   const __m256d t1 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&a[1]->x)), _mm_loadu_pd(&a[3]->x), 1);
   L3 r;
@@ -133,9 +131,16 @@ LANES_FN L3 gather3(const T* __restrict p, const uint32_t* idx, Vec3 T::*m) {
                                 _mm_loadh_pd(_mm_load_sd(&a[2]->z), &a[3]->z), 1));
   return r;
 }
-struct VecRec { Vec3 v; };
+/// The Vec3 member m of records p[idx[0..3]].
+template <class T>
+LANES_FN L3 gather3(const T* __restrict p, const uint32_t* idx, Vec3 T::*m) {
+  const Vec3* const a[4] = {&(p[idx[0]].*m), &(p[idx[1]].*m), &(p[idx[2]].*m), &(p[idx[3]].*m)};
+  return load3(a);
+}
+/// p[idx[0..3]].
 LANES_FN L3 gather3(const Vec3* __restrict p, const uint32_t* idx) {
-  return gather3(reinterpret_cast<const VecRec*>(p), idx, &VecRec::v);
+  const Vec3* const a[4] = {&p[idx[0]], &p[idx[1]], &p[idx[2]], &p[idx[3]]};
+  return load3(a);
 }
 
 /// The lanes' contacts: list entries, rows, partners, material pairs, and the kernel's
