@@ -315,10 +315,6 @@ LANES_FN void keep(const L3& h, const M4 alive, Lanes3& o) {
   _mm256_store_pd(o.z, __m256d(alive & M4(h.z)));
 }
 
-}  // namespace
-
-namespace {
-
 /// One group of four contacts of the linear law (after their geometry); kU: one material pair.
 template <bool kU>
 __attribute__((target("avx2"), always_inline)) inline void linear_group(
@@ -348,15 +344,6 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
     H[G.k[l]].fs = Vec3{s.x[l], s.y[l], s.z[l]};
   }
 }
-
-}  // namespace
-
-__attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
-                                                       const uint32_t cnt, LaneOut& out) {
-  drive<linear_group<true>, linear_group<false>>(in, hits, h0, cnt, out);
-}
-
-namespace {
 
 /// One group of four contacts of Hertz-Mindlin + EPSD (after their geometry); kU: one material pair.
 template <bool kU>
@@ -396,15 +383,6 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
     H[G.k[l]] = LH{Vec3{s.x[l], s.y[l], s.z[l]}, kp[l], Vec3{m.x[l], m.y[l], m.z[l]}};
   }
 }
-
-}  // namespace
-
-__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
-                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
-  drive<hertz_epsd_group<true>, hertz_epsd_group<false>>(in, hits, h0, cnt, out);
-}
-
-namespace {
 
 /// One group of four contacts of MEPA + EPSD (after their geometry); kU: one material pair.
 template <bool kU>
@@ -473,6 +451,16 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
 }
 
 }  // namespace
+
+__attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
+                                                       const uint32_t cnt, LaneOut& out) {
+  drive<linear_group<true>, linear_group<false>>(in, hits, h0, cnt, out);
+}
+
+__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
+                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
+  drive<hertz_epsd_group<true>, hertz_epsd_group<false>>(in, hits, h0, cnt, out);
+}
 
 __attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
