@@ -7,6 +7,7 @@
 
 #include "models/contact_law.hpp"
 #include "models/registry.hpp"
+#include "sim/lanes.hpp"
 
 namespace cohdem {
 
@@ -26,6 +27,19 @@ class ContactModelImpl final : public ContactModel {
     params_.clear();
     params_.reserve(size_t(n) * n);
     for (int k = 0; k < n * n; ++k) params_.push_back(Law::make(sets[k], mats[k]));
+    // The lanes' reading of the pairs' parameters (sim/lanes.hpp), once per parameter set;
+    // empty, so the scalar law runs, when the law has no lanes or a pair's settings are not
+    // theirs.
+    lanes_.clear();
+    if constexpr (LaneLaw<Law>::kHave) {
+      for (const Params& q : params_) {
+        if (!LaneLaw<Law>::usable(q)) {
+          lanes_.clear();
+          break;
+        }
+        lanes_.push_back(lane_params(q));
+      }
+    }
   }
   double reach(int i, int j, double rstar) const override { return Law::reach(p(i, j), rstar); }
   NormalOut normal_at(int i, int j, const PairGeom& g) const override {
@@ -59,6 +73,7 @@ class ContactModelImpl final : public ContactModel {
   std::string name_;
   int n_ = 0;
   std::vector<Params> params_;
+  std::vector<typename LaneLaw<Law>::Params> lanes_;
 };
 
 }  // namespace cohdem

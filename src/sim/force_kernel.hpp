@@ -101,20 +101,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // after every contact's stores.
   const Params* const __restrict params = params_.data();
   const size_t nmat = size_t(n_);
-  // The lanes' reading of the material pairs' parameters (laws with lanes only: sim/lanes.hpp;
-  // a few entries, built per call).
-  // Null when a material pair's settings are not the lanes' (then the scalar law runs).
+  // The lanes' reading of the material pairs' parameters (set_params), null where the scalar
+  // law runs.
   using Lanes = LaneLaw<Law>;
-  std::vector<typename Lanes::Params> lane_table;
-  bool lanes_usable = Lanes::kHave;
-  if constexpr (Lanes::kHave) {
-    lane_table.reserve(params_.size());
-    for (const Params& q : params_) {
-      lane_table.push_back(lane_params(q));
-      lanes_usable = lanes_usable && Lanes::usable(q);
-    }
-  }
-  const void* const lane_p = lanes_usable ? lane_table.data() : nullptr;
+  const void* const lane_p = lanes_.empty() ? nullptr : lanes_.data();
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;

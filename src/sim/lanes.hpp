@@ -74,8 +74,8 @@ MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p);
 /// 3/2; adhesion with the same exponent; no dp_shift).
 bool lane_usable(const MepaEpsdLaw::Params& p);
 
-/// The laws' histories as the lanes read them (static_asserts in the force loop check the
-/// layouts against ContactLaw::State).
+/// The laws' histories as the lanes read them (lane_history_layouts below checks them against
+/// ContactLaw::State).
 struct LinearLaneHistory { Vec3 fs; };
 struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
 struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
@@ -116,19 +116,17 @@ void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0,
 void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 
-/// Which laws have lanes, with their lane parameters, history and evaluation, and whether a
-/// material pair's settings can take them (usable: all pairs must).
+/// Which laws have lanes, with their lane parameters and evaluation, and whether a material
+/// pair's settings can take them (usable: all pairs must; ContactModelImpl::set_params).
 template <class Law>
 struct LaneLaw {
   static constexpr bool kHave = false;
   using Params = char;
-  using History = char;
 };
 template <>
 struct LaneLaw<LinearLaw> {
   static constexpr bool kHave = true;
   using Params = LinearLaneParams;
-  using History = LinearLaneHistory;
   static constexpr auto eval = linear_lanes_avx2;
   static bool usable(const LinearLaw::Params&) { return true; }
 };
@@ -136,7 +134,6 @@ template <>
 struct LaneLaw<HertzEpsdLaw> {
   static constexpr bool kHave = true;
   using Params = HertzEpsdLaneParams;
-  using History = HertzEpsdLaneHistory;
   static constexpr auto eval = hertz_epsd_lanes_avx2;
   static bool usable(const HertzEpsdLaw::Params&) { return true; }
 };
@@ -144,7 +141,6 @@ template <>
 struct LaneLaw<MepaEpsdLaw> {
   static constexpr bool kHave = true;
   using Params = MepaEpsdLaneParams;
-  using History = MepaEpsdLaneHistory;
   static constexpr auto eval = mepa_epsd_lanes_avx2;
   static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
 };
