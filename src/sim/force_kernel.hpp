@@ -203,10 +203,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
       // One contact's result into the sums: the force and torque on i into i's row sum, j's
       // share into its reverse sums or the per-pair buffer, in list order.
+      // reset: the contact's history is reset here where it ended (the lanes leave that to
+      // this branch, which every contact takes anyway; the scalar law resets it itself).
       auto put = [&](const uint32_t k, const uint32_t i, const uint32_t j, const bool alive, const Vec3& f,
-                     const Vec3& ti, const Vec3& tj, const double ca) __attribute__((always_inline)) {
+                     const Vec3& ti, const Vec3& tj, const double ca, const bool reset)
+                     __attribute__((always_inline)) {
         live[k] = alive;
-        if (alive) {
+        if (!alive) {
+          if (reset) hs[k] = State{};  // as ContactLaw::evaluate does
+        } else {
           force[i] += f;
           torque[i] += ti;
           if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
@@ -235,7 +240,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
             for (uint32_t q = 0; q < cnt; ++q) {
               const uint32_t k = hk[h0 + q];
               put(k, hrow[h0 + q], jdx[k], lo.alive[q] != 0, Vec3{lo.fx[q], lo.fy[q], lo.fz[q]},
-                  Vec3{lo.tix[q], lo.tiy[q], lo.tiz[q]}, Vec3{lo.tjx[q], lo.tjy[q], lo.tjz[q]}, lo.a[q]);
+                  Vec3{lo.tix[q], lo.tiy[q], lo.tiz[q]}, Vec3{lo.tjx[q], lo.tjy[q], lo.tjz[q]}, lo.a[q], true);
             }
           }
           return;
@@ -273,7 +278,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         g.dt = dt;
         g.want_a = want_a;
         const bool alive = Law::evaluate(params[size_t(species[i]) * nmat + size_t(species[j])], g, hs[k], out);
-        put(k, i, j, alive, out.f, out.ti, out.tj, out.a);
+        put(k, i, j, alive, out.f, out.ti, out.tj, out.a, false);
       }
     };
     // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i). kLocal: i is

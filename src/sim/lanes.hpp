@@ -38,11 +38,12 @@ using MepaEpsdLaw = ContactLaw<MepaNormal, ViscousDamping, HystTangential<MepaNo
 
 /// A material pair's parameters of the linear law, as the lanes read them: each a value the
 /// scalar law computes from its Params in the same way (2 beta, the resolved kt), so that the
-/// lanes' results match bit for bit.
+/// lanes' results match bit for bit. Switches are lane masks (all bits set: on; 0: off), used
+/// as they are by the lanes' selects.
 struct LinearLaneParams {
   double kn;
   double two_beta;  ///< 2.0 * beta (the scalar law's first product)
-  double limit;     ///< 1: limit_damping (damping never makes the force attractive), else 0
+  uint64_t limit;   ///< mask: limit_damping (damping never makes the force attractive)
   double mu;
   double kt;        ///< kt > 0 ? kt : kt_ratio * kn
   double damp_t;
@@ -52,22 +53,32 @@ LinearLaneParams lane_params(const LinearLaw::Params& p);
 /// The same for Hertz-Mindlin with EPSD rolling resistance.
 struct HertzEpsdLaneParams {
   double two_Estar;  ///< 2.0 * E* (kn = 2 E* a)
-  double two_beta, limit, mu;
+  double two_beta;
+  uint64_t limit;    ///< mask
+  double mu;
   double eight_Gstar;  ///< 8.0 * G* (kt = 8 G* a)
   double damp_kt;      ///< damp_t sqrt(4 G*/E*)
-  double mu_r, eta_r;
+  double mu_r;
+  double two_eta_r;    ///< eta_r * 2.0 (exact)
+  uint64_t damped;     ///< mask: eta_r > 0 (EPSD's viscous part)
 };
 HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p);
 
-/// The same for MEPA with EPSD rolling (flags as 1.0 or 0.0).
+/// The same for MEPA with EPSD rolling.
 struct MepaEpsdLaneParams {
   double k1, k2, plastic, kadh, f0;
-  double n;     ///< 1 or 1.5
-  double n_is_1;
-  double offset;  ///< coulomb_offset
-  double gamma_n, limit, mu;
-  double kt_const, kt_c, kt_ratio, kt_mult, damp_t;
-  double mu_r, eta_r;
+  double n_k2;        ///< n * k2 (kn = n k2 delta^(n-1), the scalar law's first product)
+  uint64_t n_is_1;    ///< mask: n = 1 (else 3/2)
+  uint64_t offset;    ///< mask: coulomb_offset
+  double gamma_n;
+  uint64_t limit;     ///< mask
+  double mu;
+  uint64_t kt_const;  ///< mask: a fixed kt
+  double kt_c, kt_ratio, kt_mult;
+  double gamma_t;     ///< damp_t * gamma_n (the scalar law's product; gamma_n is a constant)
+  double mu_r;
+  double two_eta_r;   ///< eta_r * 2.0 (exact)
+  uint64_t damped;    ///< mask: eta_r > 0
 };
 MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p);
 /// Whether a material pair's MEPA settings are those the lanes do (fixed k1, k2; n = 1 or
@@ -100,7 +111,8 @@ struct LaneInput {
 };
 
 /// Results of up to kLaneChunk contacts: force on i, torques on i and j, contact radius, and
-/// whether the contact is alive (its history reset and nothing else valid when not).
+/// whether the contact is alive (nothing else valid when not, and its history record is then
+/// for the caller to reset: the force loop does, in the branch it takes for every contact).
 inline constexpr uint32_t kLaneChunk = 16;
 struct LaneOut {
   double fx[kLaneChunk], fy[kLaneChunk], fz[kLaneChunk];
@@ -111,7 +123,8 @@ struct LaneOut {
 };
 
 /// Evaluate the picked entries [h0, h0 + cnt) of a screened batch (cnt <= kLaneChunk) and
-/// update their histories. AVX2 only: call when screen_avx2_enabled().
+/// update their histories (records of contacts that ended are the caller's to reset: see
+/// LaneOut). AVX2 only: call when screen_avx2_enabled().
 void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);

@@ -6,6 +6,8 @@
 #include "sim/lanes.hpp"
 
 #include <algorithm>
+#include <cstddef>
+#include <cstring>
 #include <limits>
 
 #include "particles/particle_store.hpp"
@@ -16,11 +18,15 @@
 
 namespace cohdem {
 
+namespace {
+constexpr uint64_t mask_of(const bool on) { return on ? ~uint64_t(0) : 0; }
+}  // namespace
+
 LinearLaneParams lane_params(const LinearLaw::Params& p) {
   LinearLaneParams q;
   q.kn = p.normal.kn;
   q.two_beta = 2.0 * p.damping.beta;
-  q.limit = p.damping.limit ? 1.0 : 0.0;
+  q.limit = mask_of(p.damping.limit);
   q.mu = p.tangential.mu;
   // LinearTangential::apply: kt > 0 ? kt : kt_ratio * kn, with kn = LinearNormal's kn.
   q.kt = p.tangential.kt > 0 ? p.tangential.kt : p.tangential.kt_ratio * p.normal.kn;
@@ -32,12 +38,13 @@ HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p) {
   HertzEpsdLaneParams q;
   q.two_Estar = 2.0 * p.normal.Estar;
   q.two_beta = 2.0 * p.damping.beta;
-  q.limit = p.damping.limit ? 1.0 : 0.0;
+  q.limit = mask_of(p.damping.limit);
   q.mu = p.tangential.mu;
   q.eight_Gstar = 8.0 * p.tangential.Gstar;
   q.damp_kt = p.tangential.damp_kt;
   q.mu_r = p.rolling.mu_r;
-  q.eta_r = p.rolling.eta_r;
+  q.two_eta_r = p.rolling.eta_r * 2.0;
+  q.damped = mask_of(p.rolling.eta_r > 0);
   return q;
 }
 
@@ -50,19 +57,20 @@ MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p) {
   q.plastic = np.plastic;
   q.kadh = np.kadh;
   q.f0 = np.f0;
-  q.n = np.n;
-  q.n_is_1 = np.n == 1.0 ? 1.0 : 0.0;
-  q.offset = np.offset ? 1.0 : 0.0;
+  q.n_k2 = np.n * np.k2;
+  q.n_is_1 = mask_of(np.n == 1.0);
+  q.offset = mask_of(np.offset);
   q.gamma_n = p.damping.gamma_n;
-  q.limit = p.damping.limit ? 1.0 : 0.0;
+  q.limit = mask_of(p.damping.limit);
   q.mu = tp.mu;
-  q.kt_const = tp.kt_const ? 1.0 : 0.0;
+  q.kt_const = mask_of(tp.kt_const);
   q.kt_c = tp.kt_c;
   q.kt_ratio = tp.kt_ratio;
   q.kt_mult = tp.kt_mult;
-  q.damp_t = tp.damp_t;
+  q.gamma_t = tp.damp_t * p.damping.gamma_n;
   q.mu_r = p.rolling.mu_r;
-  q.eta_r = p.rolling.eta_r;
+  q.two_eta_r = p.rolling.eta_r * 2.0;
+  q.damped = mask_of(p.rolling.eta_r > 0);
   return q;
 }
 
@@ -107,6 +115,17 @@ template <bool kU, class T>
 LANES_FN V4 par(const T* __restrict P, const uint32_t* p, double T::*m) {
   if constexpr (kU) return splat(P[p[0]].*m);
   else return gather(P, p, m);
+}
+
+/// A material pair's switch m (a lane mask) in each lane, as par.
+template <bool kU, class T>
+LANES_FN M4 par(const T* __restrict P, const uint32_t* p, uint64_t T::*m) {
+  if constexpr (kU) {
+    const long long s = (long long)(P[p[0]].*m);
+    return M4{s, s, s, s};
+  } else {
+    return M4{(long long)(P[p[0]].*m), (long long)(P[p[1]].*m), (long long)(P[p[2]].*m), (long long)(P[p[3]].*m)};
+  }
 }
 
 struct L3 { V4 x, y, z; };
@@ -161,10 +180,17 @@ LANES_FN void geometry(const LaneInput& in, const ScreenHits& hits, const uint32
     G.k[l] = hits.k[G.hh[l]];
     G.i[l] = hits.row[G.hh[l]];
     G.j[l] = in.jdx[G.k[l]];
-    G.p[l] = uint32_t(size_t(in.species[G.i[l]]) * in.nmat + size_t(in.species[G.j[l]]));
   }
   G.valid = std::min(4u, cnt - g);
-  G.uniform = G.p[0] == G.p[1] && G.p[0] == G.p[2] && G.p[0] == G.p[3];
+  // One material: one pair, no species read.
+  if (in.nmat == 1) {
+    G.p[0] = G.p[1] = G.p[2] = G.p[3] = 0;
+    G.uniform = true;
+  } else {
+    for (uint32_t l = 0; l < 4; ++l)
+      G.p[l] = uint32_t(size_t(in.species[G.i[l]]) * in.nmat + size_t(in.species[G.j[l]]));
+    G.uniform = G.p[0] == G.p[1] && G.p[0] == G.p[2] && G.p[0] == G.p[3];
+  }
   const uint8_t* const flag = in.flag;
   G.fi = M4{-(flag[G.i[0]] == kFree), -(flag[G.i[1]] == kFree), -(flag[G.i[2]] == kFree), -(flag[G.i[3]] == kFree)};
   G.fj = M4{-(flag[G.j[0]] == kFree), -(flag[G.j[1]] == kFree), -(flag[G.j[2]] == kFree), -(flag[G.j[3]] == kFree)};
@@ -214,12 +240,12 @@ LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
 /// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
 /// gamma_n in gamma.
 /// apply_limit (models/damping/restitution.hpp) in lanes: the damping force of gamma_n.
-LANES_FN V4 apply_limit4(const V4 limit, const V4 gamma, const V4 vn, const V4 f_el) {
+LANES_FN V4 apply_limit4(const M4 limit, const V4 gamma, const V4 vn, const V4 f_el) {
   const V4 fd0 = -gamma * vn;
-  const M4 lim_on = (limit != 0.0) & (f_el + fd0 < 0.0) & (fd0 < 0.0);
+  const M4 lim_on = limit & (f_el + fd0 < 0.0) & (fd0 < 0.0);
   return sel(lim_on, -max0(f_el), fd0);
 }
-LANES_FN V4 damping4(const V4 two_beta, const V4 limit, const V4 mstar, const V4 kn, const V4 vn, const V4 f_el,
+LANES_FN V4 damping4(const V4 two_beta, const M4 limit, const V4 mstar, const V4 kn, const V4 vn, const V4 f_el,
                      V4& gamma) {
   gamma = two_beta * sqrt4(mstar * kn);
   return apply_limit4(limit, gamma, vn, f_el);
@@ -262,11 +288,10 @@ LANES_FN void drive(const LaneInput& in, const ScreenHits& hits, const uint32_t 
   }
 }
 
-LANES_FN M4 is_inf(const V4 a) { return (a == kInfinity) | (a == -kInfinity); }
-
 /// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
+/// two_eta_r = eta_r * 2.0; damped: eta_r > 0.
 LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, const V4 fc, const V4 mu_r,
-                  const V4 eta_r, const V4 dt) {
+                  const V4 two_eta_r, const M4 damped, const V4 dt) {
   const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
   rotate_into_plane4(mk, G.n);
@@ -274,16 +299,16 @@ LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, cons
   mk = mk - wr * (kr * dt);
   M4 slide;
   mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
-  // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body (I = inf) adds nothing.
-  const V4 Ii = sel(G.fi, gather(in.inertia, G.i), splat(kInfinity));
-  const V4 Ij = sel(G.fj, gather(in.inertia, G.j), splat(kInfinity));
-  const M4 wi = is_inf(Ii), wj = is_inf(Ij);
-  const V4 Ji = sel(wi, splat(0.0), Ii + G.mi * G.ri * G.ri), Jj = sel(wj, splat(0.0), Ij + G.mj * G.rj * G.rj);
-  const V4 Ir = sel(wj, Ji, sel(wi, Jj, Ji * Jj / (Ji + Jj)));
-  const L3 damped = mk - wr * (eta_r * 2.0 * sqrt4(Ir * kr));
-  // eta_r = 0 leaves the spring alone (the scalar law's branch; damped would differ from it
+  // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law tests
+  // I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is finite):
+  // J = I + m r^2 of a free body, 0 (not read) of a frozen one.
+  const V4 Ji = sel(G.fi, gather(in.inertia, G.i) + G.mi * G.ri * G.ri, splat(0.0));
+  const V4 Jj = sel(G.fj, gather(in.inertia, G.j) + G.mj * G.rj * G.rj, splat(0.0));
+  const V4 Ir = sel(G.fj, sel(G.fi, Ji * Jj / (Ji + Jj), Jj), Ji);
+  const L3 damped_m = mk - wr * (two_eta_r * sqrt4(Ir * kr));
+  // eta_r = 0 leaves the spring alone (the scalar law's branch; damped_m would differ from it
   // only in the sign of a zero, or where I_r k_r is not finite).
-  return sel3(eta_r > 0.0, sel3(slide, mk, damped), mk);
+  return sel3(damped & ~slide, damped_m, mk);
 }
 
 /// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
@@ -307,13 +332,78 @@ LANES_FN void put(const Group& G, const uint32_t g, const V4 fn, const L3& ft, c
   store(out.a + g, a);
 }
 
-/// The lanes of a Vec3 history member, zeroed where the contact ended (ContactLaw: s = State{}).
-struct Lanes3 { alignas(32) double x[4], y[4], z[4]; };
-LANES_FN void keep(const L3& h, const M4 alive, Lanes3& o) {
-  _mm256_store_pd(o.x, __m256d(alive & M4(h.x)));
-  _mm256_store_pd(o.y, __m256d(alive & M4(h.y)));
-  _mm256_store_pd(o.z, __m256d(alive & M4(h.z)));
+/// The histories are written back one whole record per lane, from the lanes transposed
+/// (unpacks and 128-bit permutes), instead of one double at a time: quads(a, b, c, d)[l] =
+/// {a[l], b[l], c[l], d[l]}, a 32-byte store; pairs(a, b)[l] = {a[l], b[l]}, a 16-byte store.
+struct Quads { __m256d q[4]; };
+struct Pairs { __m128d p[4]; };
+LANES_FN Quads quads(const V4 a, const V4 b, const V4 c, const V4 d) {
+  const __m256d t0 = _mm256_unpacklo_pd(__m256d(a), __m256d(b));  // a0 b0 a2 b2
+  const __m256d t1 = _mm256_unpackhi_pd(__m256d(a), __m256d(b));  // a1 b1 a3 b3
+  const __m256d t2 = _mm256_unpacklo_pd(__m256d(c), __m256d(d));  // c0 d0 c2 d2
+  const __m256d t3 = _mm256_unpackhi_pd(__m256d(c), __m256d(d));  // c1 d1 c3 d3
+  return {{_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t1, t3, 0x20),
+           _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)}};
 }
+LANES_FN Pairs pairs(const V4 a, const V4 b) {
+  const __m256d t0 = _mm256_unpacklo_pd(__m256d(a), __m256d(b));  // a0 b0 a2 b2
+  const __m256d t1 = _mm256_unpackhi_pd(__m256d(a), __m256d(b));  // a1 b1 a3 b3
+  return {{_mm256_castpd256_pd128(t0), _mm256_castpd256_pd128(t1), _mm256_extractf128_pd(t0, 1),
+           _mm256_extractf128_pd(t1, 1)}};
+}
+/// The record of list entry k as doubles (the loads and stores go to fixed offsets in it).
+template <class H>
+LANES_FN double* rec(H* h, const uint32_t k) { return reinterpret_cast<double*>(h + k); }
+/// The lanes of the four doubles at offset o of each lane's record (entries k[0..3]), read as
+/// the stores write them: a 4x4 transpose is its own inverse.
+template <class H>
+LANES_FN Quads load_quads(H* h, const uint32_t* k, const uint32_t o) {
+  return quads(V4(_mm256_loadu_pd(rec(h, k[0]) + o)), V4(_mm256_loadu_pd(rec(h, k[1]) + o)),
+               V4(_mm256_loadu_pd(rec(h, k[2]) + o)), V4(_mm256_loadu_pd(rec(h, k[3]) + o)));
+}
+/// The same for two doubles at offset o: their lanes in a, b.
+template <class H>
+LANES_FN void load_pairs(H* h, const uint32_t* k, const uint32_t o, V4& a, V4& b) {
+  const __m256d t02 =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(rec(h, k[0]) + o)), _mm_loadu_pd(rec(h, k[2]) + o), 1);
+  const __m256d t13 =
+      _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(rec(h, k[1]) + o)), _mm_loadu_pd(rec(h, k[3]) + o), 1);
+  a = V4(_mm256_unpacklo_pd(t02, t13));
+  b = V4(_mm256_unpackhi_pd(t02, t13));
+}
+
+/// f(l) for each lane l that holds a contact of the chunk: all four written out where the
+/// group is full (most groups), so the stores need no loop.
+template <class F>
+LANES_FN void each_lane(const Group& G, F&& f) {
+  if (G.valid == 4) {
+    f(0), f(1), f(2), f(3);
+  } else {
+    for (uint32_t l = 0; l < G.valid; ++l) f(l);
+  }
+}
+
+/// out.alive[g .. g + 4) from the alive lanes' sign bits in one 4-byte store (lanes past the
+/// chunk's end write bytes that no one reads: g + 4 <= kLaneChunk).
+constexpr uint32_t alive_bytes(const int m) {
+  return uint32_t(m & 1) | uint32_t((m >> 1) & 1) << 8 | uint32_t((m >> 2) & 1) << 16 | uint32_t((m >> 3) & 1) << 24;
+}
+constexpr uint32_t kAliveBytes[16] = {alive_bytes(0),  alive_bytes(1),  alive_bytes(2),  alive_bytes(3),
+                                      alive_bytes(4),  alive_bytes(5),  alive_bytes(6),  alive_bytes(7),
+                                      alive_bytes(8),  alive_bytes(9),  alive_bytes(10), alive_bytes(11),
+                                      alive_bytes(12), alive_bytes(13), alive_bytes(14), alive_bytes(15)};
+LANES_FN void put_alive(const M4 alive, const uint32_t g, LaneOut& out) {
+  const uint32_t b = kAliveBytes[_mm256_movemask_pd(__m256d(alive))];
+  std::memcpy(out.alive + g, &b, sizeof b);
+}
+
+// The records' layouts the stores assume (ContactLaw::State, lanes.hpp's static_assert).
+static_assert(sizeof(LinearLaneHistory) == 24 && offsetof(LinearLaneHistory, fs) == 0);
+static_assert(sizeof(HertzEpsdLaneHistory) == 56 && offsetof(HertzEpsdLaneHistory, fs) == 0 &&
+              offsetof(HertzEpsdLaneHistory, kt_prev) == 24 && offsetof(HertzEpsdLaneHistory, mk) == 32);
+static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory, Dp) == 8 &&
+              offsetof(MepaEpsdLaneHistory, branch) == 16 && offsetof(MepaEpsdLaneHistory, fs) == 24 &&
+              offsetof(MepaEpsdLaneHistory, kt_prev) == 48 && offsetof(MepaEpsdLaneHistory, mk) == 56);
 
 /// One group of four contacts of the linear law (after their geometry); kU: one material pair.
 template <bool kU>
@@ -336,13 +426,17 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
                         par<kU>(P, G.p, &LP::mu), fc);
   // LinearNormal's contact radius, read only when asked for.
   put(G, g, fn, ft, nullptr, in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0), out);
-  Lanes3 s;
-  keep(fs, alive, s);
-  const int am = _mm256_movemask_pd(__m256d(alive));
-  for (uint32_t l = 0; l < G.valid; ++l) {
-    out.alive[g + l] = uint8_t((am >> l) & 1);
-    H[G.k[l]].fs = Vec3{s.x[l], s.y[l], s.z[l]};
-  }
+  // The spring's record, 24 bytes: {x, y} then z of each lane (the force loop resets the
+  // records of contacts that ended: LaneOut::alive).
+  const Pairs xy = pairs(fs.x, fs.y);
+  alignas(32) double z[4];
+  _mm256_store_pd(z, __m256d(fs.z));
+  put_alive(alive, g, out);
+  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
+    double* const r = rec(H, G.k[l]);
+    _mm_storeu_pd(r, xy.p[l]);
+    r[2] = z[l];
+  });
 }
 
 /// One group of four contacts of Hertz-Mindlin + EPSD (after their geometry); kU: one material pair.
@@ -352,7 +446,6 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
   const auto* const P = static_cast<const HertzEpsdLaneParams*>(in.params);
   auto* const H = static_cast<HertzEpsdLaneHistory*>(in.hist);
   using LP = HertzEpsdLaneParams;
-  using LH = HertzEpsdLaneHistory;
   const V4 dt = splat(in.dt);
   // HertzNormal (the lanes of ended contacts compute what no one reads).
   const M4 alive = G.delta > 0.0;
@@ -364,24 +457,27 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
   const V4 fc = max0(fn);
   // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
   const V4 kt = par<kU>(P, G.p, &LP::eight_Gstar) * a;
-  L3 fs = gather3(H, G.k, &LH::fs);
-  V4 kt_prev = gather(H, G.k, &LH::kt_prev);
+  // The records read whole, as they are written below: lanes of {fs, kt_prev} at 0 and of
+  // {kt_prev, mk} at 24.
+  const Quads h0 = load_quads(H, G.k, 0), h1 = load_quads(H, G.k, 3);
+  L3 fs{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
+  V4 kt_prev = V4(h0.q[3]);
   const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_kt) * gamma,
                              par<kU>(P, G.p, &LP::mu), fc);
-  L3 mk = gather3(H, G.k, &LH::mk);
-  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::eta_r), dt);
+  L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
+  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
+                      par<kU>(P, G.p, &LP::damped), dt);
   put(G, g, fn, ft, &mr, a, out);
-  Lanes3 s, m;
-  keep(fs, alive, s);
-  keep(mk, alive, m);
-  const V4 ktp = V4(_mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
-  alignas(32) double kp[4];
-  _mm256_store_pd(kp, __m256d(ktp));
-  const int am = _mm256_movemask_pd(__m256d(alive));
-  for (uint32_t l = 0; l < G.valid; ++l) {
-    out.alive[g + l] = uint8_t((am >> l) & 1);
-    H[G.k[l]] = LH{Vec3{s.x[l], s.y[l], s.z[l]}, kp[l], Vec3{m.x[l], m.y[l], m.z[l]}};
-  }
+  // The record, 56 bytes: {fs, kt_prev} at 0 and {kt_prev, mk} at 24 (kt_prev written twice,
+  // the same value); the force loop resets those of contacts that ended.
+  const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
+  const Quads a1 = quads(kt_prev, mk.x, mk.y, mk.z);
+  put_alive(alive, g, out);
+  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
+    double* const r = rec(H, G.k[l]);
+    _mm256_storeu_pd(r, a0.q[l]);
+    _mm256_storeu_pd(r + 3, a1.q[l]);
+  });
 }
 
 /// One group of four contacts of MEPA + EPSD (after their geometry); kU: one material pair.
@@ -391,18 +487,22 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
   const auto* const P = static_cast<const MepaEpsdLaneParams*>(in.params);
   auto* const H = static_cast<MepaEpsdLaneHistory*>(in.hist);
   using LP = MepaEpsdLaneParams;
-  using LH = MepaEpsdLaneHistory;
   const V4 dt = splat(in.dt);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
   // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
   // bounded below by the adhesive -A.
   const M4 alive = G.delta > 0.0;
   const V4 d = G.delta;
-  const V4 dn1 = sel(par<kU>(P, G.p, &LP::n_is_1) != 0.0, splat(1.0), sqrt4(d));
+  const V4 dn1 = sel(par<kU>(P, G.p, &LP::n_is_1), splat(1.0), sqrt4(d));
   const V4 D = d * dn1;
   const V4 A = par<kU>(P, G.p, &LP::kadh) * D;
   const V4 k1 = par<kU>(P, G.p, &LP::k1), k2 = par<kU>(P, G.p, &LP::k2);
-  const V4 Dmax = gather(H, G.k, &LH::Dmax), Dp = gather(H, G.k, &LH::Dp);
+  // The records read whole, as they are written below: lanes of {Dmax, Dp, branch, fs.x},
+  // {fs.y, fs.z, kt_prev, mk.x} and {mk.y, mk.z} by transposing the four records' bytes.
+  const Quads h0 = load_quads(H, G.k, 0), h1 = load_quads(H, G.k, 4);
+  V4 mk_y, mk_z;
+  load_pairs(H, G.k, 8, mk_y, mk_z);
+  const V4 Dmax = V4(h0.q[0]), Dp = V4(h0.q[1]);
   const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
   const M4 load = f2 >= f1;
   const M4 adh = ~load & ~(f2 > -A);
@@ -412,42 +512,38 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
   const V4 f0 = par<kU>(P, G.p, &LP::f0);
   const V4 f_el = f0 + f;
   const V4 f_adh = A - f0;
-  const V4 kn = par<kU>(P, G.p, &LP::n) * k2 * dn1;
+  const V4 kn = par<kU>(P, G.p, &LP::n_k2) * dn1;
   const V4 k_load = k1 * dn1;
   // ViscousDamping.
   const V4 gamma = par<kU>(P, G.p, &LP::gamma_n);
   const V4 fn = f_el + apply_limit4(par<kU>(P, G.p, &LP::limit), gamma, G.vn, f_el);
-  const V4 fc = max0(sel(par<kU>(P, G.p, &LP::offset) != 0.0, f_el + f_adh, f_el));  // coulomb_base
+  const V4 fc = max0(sel(par<kU>(P, G.p, &LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
-  const V4 kt = sel(par<kU>(P, G.p, &LP::kt_const) != 0.0, par<kU>(P, G.p, &LP::kt_c),
+  const V4 kt = sel(par<kU>(P, G.p, &LP::kt_const), par<kU>(P, G.p, &LP::kt_c),
                     par<kU>(P, G.p, &LP::kt_ratio) * k_load * par<kU>(P, G.p, &LP::kt_mult));
-  L3 fs = gather3(H, G.k, &LH::fs);
-  V4 kt_prev = gather(H, G.k, &LH::kt_prev);
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_t) * gamma,
+  L3 fs{V4(h0.q[3]), V4(h1.q[0]), V4(h1.q[1])};
+  V4 kt_prev = V4(h1.q[2]);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::gamma_t),
                              par<kU>(P, G.p, &LP::mu), fc);
-  L3 mk = gather3(H, G.k, &LH::mk);
-  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::eta_r), dt);
+  L3 mk{V4(h1.q[3]), mk_y, mk_z};
+  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
+                      par<kU>(P, G.p, &LP::damped), dt);
   put(G, g, fn, ft, &mr, in.want_a ? sqrt4(G.rstar * d) : splat(0.0), out);
-  Lanes3 s, m;
-  keep(fs, alive, s);
-  keep(mk, alive, m);
-  alignas(32) double kp[4], dm[4], dpl[4];
-  _mm256_store_pd(kp, _mm256_and_pd(__m256d(alive), __m256d(kt_prev)));
-  _mm256_store_pd(dm, _mm256_and_pd(__m256d(alive), __m256d(Dmax1)));
-  _mm256_store_pd(dpl, _mm256_and_pd(__m256d(alive), __m256d(Dp1)));
-  const int am = _mm256_movemask_pd(__m256d(alive));
-  const int lm = _mm256_movemask_pd(__m256d(load)), bm = _mm256_movemask_pd(__m256d(adh));
-  for (uint32_t l = 0; l < G.valid; ++l) {
-    const bool al = (am >> l) & 1;
-    out.alive[g + l] = uint8_t(al);
-    LH& h = H[G.k[l]];
-    h.Dmax = dm[l];
-    h.Dp = dpl[l];
-    h.branch = !al ? 0 : (((lm >> l) & 1) ? 1 : (((bm >> l) & 1) ? 3 : 2));
-    h.fs = Vec3{s.x[l], s.y[l], s.z[l]};
-    h.kt_prev = kp[l];
-    h.mk = Vec3{m.x[l], m.y[l], m.z[l]};
-  }
+  // The record, 80 bytes: {Dmax, Dp, branch, fs.x} at 0, {fs.y, fs.z, kt_prev, mk.x} at 32,
+  // {mk.y, mk.z} at 64 (the force loop resets those of contacts that ended). The branch is an
+  // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
+  // stays zero as the scalar law leaves it.
+  const M4 br = load ? M4{1, 1, 1, 1} : (adh ? M4{3, 3, 3, 3} : M4{2, 2, 2, 2});
+  const Quads a0 = quads(Dmax1, Dp1, V4(br), fs.x);
+  const Quads a1 = quads(fs.y, fs.z, kt_prev, mk.x);
+  const Pairs a2 = pairs(mk.y, mk.z);
+  put_alive(alive, g, out);
+  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
+    double* const r = rec(H, G.k[l]);
+    _mm256_storeu_pd(r, a0.q[l]);
+    _mm256_storeu_pd(r + 4, a1.q[l]);
+    _mm_storeu_pd(r + 8, a2.p[l]);
+  });
 }
 
 }  // namespace
