@@ -56,10 +56,14 @@ struct Drift {
   bool frozen = false;  ///< some particle is frozen (does not move: the origin is in the box)
   /// A particle that can move, displaced by d, its radius grown by dr.
   COHDEM_INLINE void add(const Vec3& d, double dr) {
+    add(d);
+    grow = std::max(grow, dr);
+  }
+  /// The same for a particle whose radius is as at the list build.
+  COHDEM_INLINE void add(const Vec3& d) {
     dmax2 = std::max(dmax2, norm2(d));
     lo.x = std::min(lo.x, d.x); lo.y = std::min(lo.y, d.y); lo.z = std::min(lo.z, d.z);
     hi.x = std::max(hi.x, d.x); hi.y = std::max(hi.y, d.y); hi.z = std::max(hi.z, d.z);
-    grow = std::max(grow, dr);
   }
   void merge(const Drift& o) {
     dmax2 = std::max(dmax2, o.dmax2);
@@ -138,6 +142,10 @@ class NeighborList {
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x, double r) const {
     d.add(x - x_ref_[i], r - r_ref_[i]);
   }
+  /// The same for a particle whose radius has not changed since the build (the force loop's
+  /// fused drift: it runs only without a thermal model, the one thing that changes radii
+  /// between builds), so its radius growth, 0, is not read.
+  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - x_ref_[i]); }
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint
   /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any

@@ -261,7 +261,8 @@ struct ForceContext {
   /// drift x += v open_dt, and its displacement since the list build goes into *drift
   /// (frozen particles mark it): the operations of System::step_once's particle pass, in the
   /// same order, so results are bit-identical to the unfused step. Particles attached to
-  /// walls are left to that pass. The state after the call is then mid-step.
+  /// walls are left to that pass. The state after the call is then mid-step. Only for
+  /// particles whose radii are as at the list build (no thermal model: System::step_once).
   double open_dt = 0;
   Drift* drift = nullptr;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).

@@ -331,7 +331,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         // again in this call. Particles attached to walls are carried by that pass.
         if (open_dt > 0) {
           open_free(vi, wi, x[i], F, T, hm, hI, open_dt);
-          nl.add_moved(drift, size_t(i), x[i], radius[i]);
+          nl.add_moved(drift, size_t(i), x[i]);  // radii unchanged since the build (no thermal model)
         }
         v[i] = vi;
         omega[i] = wi;
