@@ -122,8 +122,14 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   {
   const int nt = omp_get_num_threads(), tid = omp_get_thread_num();
   const size_t a0 = n * tid / nt, a1 = n * (tid + 1) / nt;
-  std::vector<uint32_t>& jdx = tl_jdx_[tid];
-  std::vector<uint8_t>& image = tl_img_[tid];
+  // The thread's buffers are filled through vector objects of its own (swapped in and out,
+  // keeping their capacity): the tl_ vectors' headers share cache lines, and every
+  // push_back through them bounced those lines between the cores (two threads took three
+  // times one thread's time over the pair search of the chute).
+  std::vector<uint32_t> jdx;
+  std::vector<uint8_t> image;
+  jdx.swap(tl_jdx_[tid]);
+  image.swap(tl_img_[tid]);
   jdx.clear();
   image.clear();
   for (size_t a = a0; a < a1; ++a) {
@@ -181,6 +187,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     }
     start[a + 1] = uint32_t(jdx.size());  // end of the row within this thread's buffer
   }
+  jdx.swap(tl_jdx_[tid]);
+  image.swap(tl_img_[tid]);
   if (tid == 0) team = nt;
   }
   size_t np = 0;

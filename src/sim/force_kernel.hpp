@@ -380,17 +380,22 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // shared out in equal parts after the barrier; finish() is told the block that owns the
     // particle (its locality test is the owner's), so what is summed, and in which order, is
     // the same whichever thread finishes it. Without one, each thread finishes its own.
-    std::vector<uint32_t> own;  // without a PairSlots
-    std::vector<uint32_t>* const mine = share ? &c.slots->deferred[size_t(tid)] : &own;
-    mine->clear();
+    // The thread's list is filled through a vector object of its own, and handed to the
+    // PairSlots (which keeps its capacity from call to call) before the barrier: the
+    // PairSlots' vector headers share cache lines, which every push_back through them
+    // bounced between the cores.
+    std::vector<uint32_t> own;
+    if (share) own.swap(c.slots->deferred[size_t(tid)]);
+    own.clear();
     auto none = [](const long) __attribute__((always_inline)) {};
     const double t_sweep = share ? omp_get_wtime() : 0.0;
     const long next =
         nt == 1 ? sweep.template operator()<true>(none)
                 : sweep.template operator()<false>(
-                      [&](const long q) __attribute__((always_inline)) { defer_range(*mine, q, q + 1); });
-    if (nt > 1) defer_range(*mine, next, b);
+                      [&](const long q) __attribute__((always_inline)) { defer_range(own, q, q + 1); });
+    if (nt > 1) defer_range(own, next, b);
     if (share) {
+      own.swap(c.slots->deferred[size_t(tid)]);
       c.slots->measured(tid, omp_get_wtime() - t_sweep);
       if (tid == 0) timed = true;
 #pragma omp barrier
