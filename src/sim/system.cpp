@@ -230,7 +230,9 @@ void System::compute_forces(double kick_h, bool open_next) {
   const long nb = (n + kBlock - 1) / kBlock;
   wall_part_.assign(size_t(nb) * nwall * 2, Vec3{});
   const std::vector<uint32_t>& linked = nl.wall_linked;
-#pragma omp parallel for schedule(static) if (n > cfg.parallel_min)
+  // The work is the linked particles': on one thread below parallel_min of them (a fork and
+  // join per step cost more than a few thousand particles' wall sums; the result is the same).
+#pragma omp parallel for schedule(static) if (long(linked.size()) > cfg.parallel_min)
   for (long b = 0; b < nb; ++b) {
     Vec3* part = wall_part_.data() + size_t(b) * nwall * 2;  // force, torque of each wall
     const long end = std::min(n, (b + 1) * kBlock);
