@@ -5,7 +5,7 @@ the instruction-count form of issue 6's "MEPA n = 3/2 with rolling resistance co
 1.3x the linear model", repeatable on any machine at any load.
 
   python3 bench/contact_instructions.py                       # linear, linear+epsd, HM+epsd, MEPA+epsd
-  python3 bench/contact_instructions.py --models 'linear,mepa+epsd' --iters 6
+  python3 bench/contact_instructions.py --models 'linear,mepa+epsd' --iters 6 --json out.json
 
 The problem is BM_Force of build/cohdem_bench (bench/micro.cpp): 32,768 spheres in a simple
 cubic lattice, slightly compressed, three contacts each in the half list (98,304 contacts,
@@ -20,6 +20,7 @@ valgrind 3.19 (Debian 12) does not decode AVX-512: the benchmark binary must be 
 project's portable build (it is: no -march). Python 3 standard library only.
 """
 import argparse
+import json
 import os
 import re
 import subprocess
@@ -65,6 +66,7 @@ def main():
                     help="comma-separated BM_Force tags (law, or law+rolling)")
     ap.add_argument("--iters", type=int, default=6, help="timed force-loop calls (COHDEM_BENCH_ITERS)")
     ap.add_argument("--bench", default=os.path.join(REPO, "build", "cohdem_bench"))
+    ap.add_argument("--json", help="also write the counts to this file")
     a = ap.parse_args()
     if not os.path.exists(a.bench):
         sys.exit(f"{a.bench} not found: build it first (ninja -C build cohdem_bench)")
@@ -84,6 +86,10 @@ def main():
         roll = m.split("+")[1] if "+" in m else None
         like = base.get("linear+" + roll) if roll else base.get("linear")
         print(f"{m:22s} {ipc:21.1f} {ratio(ipc, base.get('linear')):>10s} {ratio(ipc, like):>23s}")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"contacts": CONTACTS, "iters": a.iters,
+                       "instructions_per_contact": {m: ipc for m, ipc, _ in rows}}, f, indent=1)
 
 if __name__ == "__main__":
     main()

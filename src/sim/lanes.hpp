@@ -1,12 +1,11 @@
 // Contacts evaluated four at a time, one per lane of an AVX2 register ("lanes of contacts"),
-// for the two laws of the peer benchmarks, the linear law without rolling or twisting
-// resistance (LAMMPS's chute, the poured packing) and Hertz-Mindlin with EPSD rolling
-// resistance (the chute's `granular hmr` variant), and for MEPA with EPSD rolling (the ring
-// shear tester's law) where every material pair has fixed stiffnesses, n = 1 or 3/2 and no
-// dp_shift (lane_usable; other MEPA settings run the scalar law). The force loop (sim/force_kernel.hpp)
-// screens a batch of list entries as before; the touching ones are then evaluated here in
-// groups of four, and the loop adds their results to the particles' sums one contact at a
-// time, in list order.
+// for the linear law (LAMMPS's chute, the poured packing), Hertz-Mindlin (the chute's
+// `granular hmr` variant, the packed beds) and MEPA (the ring shear tester's law; where every
+// material pair has fixed stiffnesses, n = 1 or 3/2 and no dp_shift: lane_usable, other MEPA
+// settings run the scalar law), each with rolling resistance `none` or `epsd` and no
+// twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
+// the touching ones are then evaluated here in groups of four, and the loop adds their
+// results to the particles' sums one contact at a time, in list order.
 //
 // The lanes do the operations of the law's ContactLaw::evaluate and of the kernel's geometry,
 // in the same order, without fused multiply-adds, with every branch of the scalar code turned
@@ -32,14 +31,23 @@
 
 namespace cohdem {
 
-using LinearLaw = ContactLaw<LinearNormal, LinearRestitutionDamping, LinearTangential, NoRolling, NoTwisting>;
-using HertzEpsdLaw = ContactLaw<HertzNormal, TsujiDamping, MindlinTangential, EpsdRolling, NoTwisting>;
-using MepaEpsdLaw = ContactLaw<MepaNormal, ViscousDamping, HystTangential<MepaNormal>, EpsdRolling, NoTwisting>;
+template <class R>
+using LinearLawR = ContactLaw<LinearNormal, LinearRestitutionDamping, LinearTangential, R, NoTwisting>;
+template <class R>
+using HertzLawR = ContactLaw<HertzNormal, TsujiDamping, MindlinTangential, R, NoTwisting>;
+template <class R>
+using MepaLawR = ContactLaw<MepaNormal, ViscousDamping, HystTangential<MepaNormal>, R, NoTwisting>;
+using LinearLaw = LinearLawR<NoRolling>;
+using LinearEpsdLaw = LinearLawR<EpsdRolling>;
+using HertzLaw = HertzLawR<NoRolling>;
+using HertzEpsdLaw = HertzLawR<EpsdRolling>;
+using MepaLaw = MepaLawR<NoRolling>;
+using MepaEpsdLaw = MepaLawR<EpsdRolling>;
 
 /// A material pair's parameters of the linear law, as the lanes read them: each a value the
 /// scalar law computes from its Params in the same way (2 beta, the resolved kt), so that the
 /// lanes' results match bit for bit. Switches are lane masks (all bits set: on; 0: off), used
-/// as they are by the lanes' selects.
+/// as they are by the lanes' selects. The rolling fields are EPSD's (0 without rolling).
 struct LinearLaneParams {
   double kn;
   double two_beta;  ///< 2.0 * beta (the scalar law's first product)
@@ -47,11 +55,15 @@ struct LinearLaneParams {
   double mu;
   double kt;        ///< kt > 0 ? kt : kt_ratio * kn
   double damp_t;
+  double mu_r;
+  double two_eta_r;  ///< eta_r * 2.0 (exact)
+  uint64_t damped;   ///< mask: eta_r > 0 (EPSD's viscous part)
 };
 LinearLaneParams lane_params(const LinearLaw::Params& p);
+LinearLaneParams lane_params(const LinearEpsdLaw::Params& p);
 
-/// The same for Hertz-Mindlin with EPSD rolling resistance.
-struct HertzEpsdLaneParams {
+/// The same for Hertz-Mindlin.
+struct HertzLaneParams {
   double two_Estar;  ///< 2.0 * E* (kn = 2 E* a)
   double two_beta;
   uint64_t limit;    ///< mask
@@ -60,12 +72,13 @@ struct HertzEpsdLaneParams {
   double damp_kt;      ///< damp_t sqrt(4 G*/E*)
   double mu_r;
   double two_eta_r;    ///< eta_r * 2.0 (exact)
-  uint64_t damped;     ///< mask: eta_r > 0 (EPSD's viscous part)
+  uint64_t damped;     ///< mask: eta_r > 0
 };
-HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p);
+HertzLaneParams lane_params(const HertzLaw::Params& p);
+HertzLaneParams lane_params(const HertzEpsdLaw::Params& p);
 
-/// The same for MEPA with EPSD rolling.
-struct MepaEpsdLaneParams {
+/// The same for MEPA.
+struct MepaLaneParams {
   double k1, k2, plastic, kadh, f0;
   double n_k2;        ///< n * k2 (kn = n k2 delta^(n-1), the scalar law's first product)
   uint64_t n_is_1;    ///< mask: n = 1 (else 3/2)
@@ -80,15 +93,21 @@ struct MepaEpsdLaneParams {
   double two_eta_r;   ///< eta_r * 2.0 (exact)
   uint64_t damped;    ///< mask: eta_r > 0
 };
-MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p);
+MepaLaneParams lane_params(const MepaLaw::Params& p);
+MepaLaneParams lane_params(const MepaEpsdLaw::Params& p);
 /// Whether a material pair's MEPA settings are those the lanes do (fixed k1, k2; n = 1 or
 /// 3/2; adhesion with the same exponent; no dp_shift).
+bool lane_usable(const MepaLaw::Params& p);
 bool lane_usable(const MepaEpsdLaw::Params& p);
 
 /// The laws' histories as the lanes read them (lane_history_layouts below checks them against
-/// ContactLaw::State).
+/// ContactLaw::State): the tangential spring, its last stiffness where it can fall, EPSD's
+/// spring; MEPA's largest and plastic overlaps and branch first.
 struct LinearLaneHistory { Vec3 fs; };
+struct LinearEpsdLaneHistory { Vec3 fs; Vec3 mk; };
+struct HertzLaneHistory { Vec3 fs; double kt_prev; };
 struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
+struct MepaLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; };
 struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
@@ -125,8 +144,12 @@ struct LaneOut {
 /// Evaluate the picked entries [h0, h0 + cnt) of a screened batch (cnt <= kLaneChunk) and
 /// update their histories (records of contacts that ended are the caller's to reset: see
 /// LaneOut). AVX2 only: call when screen_avx2_enabled().
+using LaneEval = void (*)(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void linear_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void hertz_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void mepa_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 
 /// Which laws have lanes, with their lane parameters and evaluation, and whether a material
@@ -136,50 +159,59 @@ struct LaneLaw {
   static constexpr bool kHave = false;
   using Params = char;
 };
-template <>
-struct LaneLaw<LinearLaw> {
+template <class Law, class P, LaneEval kEval>
+struct LaneLawOf {
   static constexpr bool kHave = true;
-  using Params = LinearLaneParams;
-  static constexpr auto eval = linear_lanes_avx2;
-  static bool usable(const LinearLaw::Params&) { return true; }
+  using Params = P;
+  static constexpr LaneEval eval = kEval;
+  static bool usable(const typename Law::Params&) { return true; }
 };
 template <>
-struct LaneLaw<HertzEpsdLaw> {
-  static constexpr bool kHave = true;
-  using Params = HertzEpsdLaneParams;
-  static constexpr auto eval = hertz_epsd_lanes_avx2;
-  static bool usable(const HertzEpsdLaw::Params&) { return true; }
+struct LaneLaw<LinearLaw> : LaneLawOf<LinearLaw, LinearLaneParams, linear_lanes_avx2> {};
+template <>
+struct LaneLaw<LinearEpsdLaw> : LaneLawOf<LinearEpsdLaw, LinearLaneParams, linear_epsd_lanes_avx2> {};
+template <>
+struct LaneLaw<HertzLaw> : LaneLawOf<HertzLaw, HertzLaneParams, hertz_lanes_avx2> {};
+template <>
+struct LaneLaw<HertzEpsdLaw> : LaneLawOf<HertzEpsdLaw, HertzLaneParams, hertz_epsd_lanes_avx2> {};
+template <>
+struct LaneLaw<MepaLaw> : LaneLawOf<MepaLaw, MepaLaneParams, mepa_lanes_avx2> {
+  static bool usable(const MepaLaw::Params& p) { return lane_usable(p); }
 };
 template <>
-struct LaneLaw<MepaEpsdLaw> {
-  static constexpr bool kHave = true;
-  using Params = MepaEpsdLaneParams;
-  static constexpr auto eval = mepa_epsd_lanes_avx2;
+struct LaneLaw<MepaEpsdLaw> : LaneLawOf<MepaEpsdLaw, MepaLaneParams, mepa_epsd_lanes_avx2> {
   static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
 };
 
 /// The lane histories are the laws' State, byte for byte.
-constexpr bool lane_history_layouts() {
-  LinearLaw::State a{};
-  a.tangential.fs = {1, 2, 3};
-  const auto la = std::bit_cast<LinearLaneHistory>(a);
-  HertzEpsdLaw::State b{};
-  b.tangential.fs = {1, 2, 3};
-  b.tangential.kt_prev = 4;
-  b.rolling.mk = {5, 6, 7};
-  const auto lb = std::bit_cast<HertzEpsdLaneHistory>(b);
-  MepaEpsdLaw::State c{};
-  c.normal.Dmax = 8;
-  c.normal.Dp = 9;
-  c.normal.branch = 2;
-  c.tangential.fs = {1, 2, 3};
-  c.tangential.kt_prev = 4;
-  c.rolling.mk = {5, 6, 7};
-  const auto lc = std::bit_cast<MepaEpsdLaneHistory>(c);
-  return la.fs == Vec3{1, 2, 3} && lb.fs == Vec3{1, 2, 3} && lb.kt_prev == 4 && lb.mk == Vec3{5, 6, 7} &&
-         lc.Dmax == 8 && lc.Dp == 9 && lc.branch == 2 && lc.fs == Vec3{1, 2, 3} && lc.kt_prev == 4 &&
-         lc.mk == Vec3{5, 6, 7};
+template <class LH, class Law>
+constexpr bool same_layout(const bool mepa, const bool kt_prev, const bool mk) {
+  typename Law::State s{};
+  s.tangential.fs = {1, 2, 3};
+  if constexpr (requires { s.tangential.kt_prev; }) s.tangential.kt_prev = 4;
+  if constexpr (requires { s.rolling.mk; }) s.rolling.mk = {5, 6, 7};
+  if constexpr (requires { s.normal.Dmax; }) {
+    s.normal.Dmax = 8;
+    s.normal.Dp = 9;
+    s.normal.branch = 2;
+  }
+  if (sizeof(LH) != sizeof(typename Law::State)) return false;
+  const auto h = std::bit_cast<LH>(s);
+  bool ok = h.fs == Vec3{1, 2, 3};
+  if constexpr (requires { h.kt_prev; }) ok = ok && kt_prev && h.kt_prev == 4;
+  else ok = ok && !kt_prev;
+  if constexpr (requires { h.mk; }) ok = ok && mk && h.mk == Vec3{5, 6, 7};
+  else ok = ok && !mk;
+  if constexpr (requires { h.Dmax; }) ok = ok && mepa && h.Dmax == 8 && h.Dp == 9 && h.branch == 2;
+  else ok = ok && !mepa;
+  return ok;
 }
-static_assert(lane_history_layouts(), "the lanes' histories must be the laws' State, byte for byte");
+static_assert(same_layout<LinearLaneHistory, LinearLaw>(false, false, false) &&
+                  same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>(false, false, true) &&
+                  same_layout<HertzLaneHistory, HertzLaw>(false, true, false) &&
+                  same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>(false, true, true) &&
+                  same_layout<MepaLaneHistory, MepaLaw>(true, true, false) &&
+                  same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(true, true, true),
+              "the lanes' histories must be the laws' State, byte for byte");
 
 }  // namespace cohdem

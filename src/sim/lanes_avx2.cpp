@@ -6,6 +6,7 @@
 #include "sim/lanes.hpp"
 
 #include <algorithm>
+#include <type_traits>
 #include <cstddef>
 #include <cstring>
 #include <limits>
@@ -19,10 +20,24 @@
 namespace cohdem {
 
 namespace {
-constexpr uint64_t mask_of(const bool on) { return on ? ~uint64_t(0) : 0; }
-}  // namespace
 
-LinearLaneParams lane_params(const LinearLaw::Params& p) {
+constexpr uint64_t mask_of(const bool on) { return on ? ~uint64_t(0) : 0; }
+
+/// EPSD's fields of the lane parameters (0 without rolling resistance).
+template <class Q, class R>
+void rolling_params(Q& q, const R& r) {
+  if constexpr (requires { r.mu_r; }) {
+    q.mu_r = r.mu_r;
+    q.two_eta_r = r.eta_r * 2.0;
+    q.damped = mask_of(r.eta_r > 0);
+  } else {
+    q.mu_r = q.two_eta_r = 0;
+    q.damped = 0;
+  }
+}
+
+template <class P>
+LinearLaneParams linear_params(const P& p) {
   LinearLaneParams q;
   q.kn = p.normal.kn;
   q.two_beta = 2.0 * p.damping.beta;
@@ -31,27 +46,28 @@ LinearLaneParams lane_params(const LinearLaw::Params& p) {
   // LinearTangential::apply: kt > 0 ? kt : kt_ratio * kn, with kn = LinearNormal's kn.
   q.kt = p.tangential.kt > 0 ? p.tangential.kt : p.tangential.kt_ratio * p.normal.kn;
   q.damp_t = p.tangential.damp_t;
+  rolling_params(q, p.rolling);
   return q;
 }
 
-HertzEpsdLaneParams lane_params(const HertzEpsdLaw::Params& p) {
-  HertzEpsdLaneParams q;
+template <class P>
+HertzLaneParams hertz_params(const P& p) {
+  HertzLaneParams q;
   q.two_Estar = 2.0 * p.normal.Estar;
   q.two_beta = 2.0 * p.damping.beta;
   q.limit = mask_of(p.damping.limit);
   q.mu = p.tangential.mu;
   q.eight_Gstar = 8.0 * p.tangential.Gstar;
   q.damp_kt = p.tangential.damp_kt;
-  q.mu_r = p.rolling.mu_r;
-  q.two_eta_r = p.rolling.eta_r * 2.0;
-  q.damped = mask_of(p.rolling.eta_r > 0);
+  rolling_params(q, p.rolling);
   return q;
 }
 
-MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p) {
+template <class P>
+MepaLaneParams mepa_params(const P& p) {
   const auto& np = p.normal;
   const auto& tp = p.tangential;
-  MepaEpsdLaneParams q;
+  MepaLaneParams q;
   q.k1 = np.k1;
   q.k2 = np.k2;
   q.plastic = np.plastic;
@@ -68,18 +84,28 @@ MepaEpsdLaneParams lane_params(const MepaEpsdLaw::Params& p) {
   q.kt_ratio = tp.kt_ratio;
   q.kt_mult = tp.kt_mult;
   q.gamma_t = tp.damp_t * p.damping.gamma_n;
-  q.mu_r = p.rolling.mu_r;
-  q.two_eta_r = p.rolling.eta_r * 2.0;
-  q.damped = mask_of(p.rolling.eta_r > 0);
+  rolling_params(q, p.rolling);
   return q;
 }
 
-bool lane_usable(const MepaEpsdLaw::Params& p) {
+template <class P>
+bool mepa_usable(const P& p) {
   const auto& np = p.normal;
   // HystereticNormal::apply with p.fixed, x_is_n and no shift; pow_nm1 as 1 or a square root;
   // HystTangential without kt_hertz (never with fixed stiffnesses; checked all the same).
   return np.fixed && np.x_is_n && !np.shift && (np.n == 1.0 || np.n == 1.5) && !p.tangential.kt_hertz;
 }
+
+}  // namespace
+
+LinearLaneParams lane_params(const LinearLaw::Params& p) { return linear_params(p); }
+LinearLaneParams lane_params(const LinearEpsdLaw::Params& p) { return linear_params(p); }
+HertzLaneParams lane_params(const HertzLaw::Params& p) { return hertz_params(p); }
+HertzLaneParams lane_params(const HertzEpsdLaw::Params& p) { return hertz_params(p); }
+MepaLaneParams lane_params(const MepaLaw::Params& p) { return mepa_params(p); }
+MepaLaneParams lane_params(const MepaEpsdLaw::Params& p) { return mepa_params(p); }
+bool lane_usable(const MepaLaw::Params& p) { return mepa_usable(p); }
+bool lane_usable(const MepaEpsdLaw::Params& p) { return mepa_usable(p); }
 
 #if defined(__x86_64__)
 
@@ -311,8 +337,24 @@ LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, cons
   return sel3(damped & ~slide, damped_m, mk);
 }
 
+/// out.alive[g .. g + 4) from the alive lanes' sign bits in one 4-byte store (lanes past the
+/// chunk's end write bytes that no one reads: g + 4 <= kLaneChunk).
+constexpr uint32_t alive_bytes(const int m) {
+  return uint32_t(m & 1) | uint32_t((m >> 1) & 1) << 8 | uint32_t((m >> 2) & 1) << 16 | uint32_t((m >> 3) & 1) << 24;
+}
+constexpr uint32_t kAliveBytes[16] = {alive_bytes(0),  alive_bytes(1),  alive_bytes(2),  alive_bytes(3),
+                                      alive_bytes(4),  alive_bytes(5),  alive_bytes(6),  alive_bytes(7),
+                                      alive_bytes(8),  alive_bytes(9),  alive_bytes(10), alive_bytes(11),
+                                      alive_bytes(12), alive_bytes(13), alive_bytes(14), alive_bytes(15)};
+LANES_FN void put_alive(const M4 alive, const uint32_t g, LaneOut& out) {
+  const uint32_t b = kAliveBytes[_mm256_movemask_pd(__m256d(alive))];
+  std::memcpy(out.alive + g, &b, sizeof b);
+}
+
 /// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
-LANES_FN void put(const Group& G, const uint32_t g, const V4 fn, const L3& ft, const L3* mr, const V4 a, LaneOut& out) {
+LANES_FN void put(const Group& G, const uint32_t g, const M4 alive, const V4 fn, const L3& ft, const L3* mr, const V4 a,
+                  LaneOut& out) {
+  put_alive(alive, g, out);
   const L3 nxft = cross3(G.n, ft);
   const L3 f = G.n * fn + ft;
   L3 ti = nxft * -G.li, tj = nxft * -G.lj;
@@ -383,19 +425,23 @@ LANES_FN void each_lane(const Group& G, F&& f) {
   }
 }
 
-/// out.alive[g .. g + 4) from the alive lanes' sign bits in one 4-byte store (lanes past the
-/// chunk's end write bytes that no one reads: g + 4 <= kLaneChunk).
-constexpr uint32_t alive_bytes(const int m) {
-  return uint32_t(m & 1) | uint32_t((m >> 1) & 1) << 8 | uint32_t((m >> 2) & 1) << 16 | uint32_t((m >> 3) & 1) << 24;
+/// Each lane's record (entry G.k[l]) written from the transposed lanes: parts At{o, v} of
+/// quads (32 bytes) or pairs (16 bytes) at offset o, in doubles, in the order given.
+template <class T>
+struct At {
+  uint32_t o;
+  const T& v;
+};
+LANES_FN void store_part(double* r, const uint32_t l, const At<Quads>& a) { _mm256_storeu_pd(r + a.o, a.v.q[l]); }
+LANES_FN void store_part(double* r, const uint32_t l, const At<Pairs>& a) { _mm_storeu_pd(r + a.o, a.v.p[l]); }
+template <class H, class... T>
+LANES_FN void store_records(const Group& G, H* h, const At<T>&... parts) {
+  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
+    double* const r = rec(h, G.k[l]);
+    (store_part(r, l, parts), ...);
+  });
 }
-constexpr uint32_t kAliveBytes[16] = {alive_bytes(0),  alive_bytes(1),  alive_bytes(2),  alive_bytes(3),
-                                      alive_bytes(4),  alive_bytes(5),  alive_bytes(6),  alive_bytes(7),
-                                      alive_bytes(8),  alive_bytes(9),  alive_bytes(10), alive_bytes(11),
-                                      alive_bytes(12), alive_bytes(13), alive_bytes(14), alive_bytes(15)};
-LANES_FN void put_alive(const M4 alive, const uint32_t g, LaneOut& out) {
-  const uint32_t b = kAliveBytes[_mm256_movemask_pd(__m256d(alive))];
-  std::memcpy(out.alive + g, &b, sizeof b);
-}
+
 
 // The records' layouts the stores assume (ContactLaw::State, lanes.hpp's static_assert).
 static_assert(sizeof(LinearLaneHistory) == 24 && offsetof(LinearLaneHistory, fs) == 0);
@@ -405,12 +451,14 @@ static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory,
               offsetof(MepaEpsdLaneHistory, branch) == 16 && offsetof(MepaEpsdLaneHistory, fs) == 24 &&
               offsetof(MepaEpsdLaneHistory, kt_prev) == 48 && offsetof(MepaEpsdLaneHistory, mk) == 56);
 
-/// One group of four contacts of the linear law (after their geometry); kU: one material pair.
-template <bool kU>
+/// One group of four contacts of the linear law (after their geometry); kU: one material
+/// pair; kRoll: with EPSD rolling resistance.
+template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void linear_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const auto* const P = static_cast<const LinearLaneParams*>(in.params);
-  auto* const H = static_cast<LinearLaneHistory*>(in.hist);
+  using LH = std::conditional_t<kRoll, LinearEpsdLaneHistory, LinearLaneHistory>;
+  auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
   // LinearNormal.
   const V4 kn = par<kU>(P, G.p, &LP::kn);
@@ -419,33 +467,52 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
   V4 gamma;
   const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
   const V4 fc = max0(fn);  // NormalBase::coulomb_base
-  // LinearTangential: kt fixed per material pair.
-  L3 fs = gather3(H, G.k, &LinearLaneHistory::fs);
+  // LinearTangential: kt fixed per material pair. The records: {fs}, or {fs, mk} read as
+  // {fs, mk.x} and {mk.y, mk.z}.
+  L3 fs, mk;
+  if constexpr (kRoll) {
+    const Quads h0 = load_quads(H, G.k, 0);
+    V4 mk_y, mk_z;
+    load_pairs(H, G.k, 4, mk_y, mk_z);
+    fs = L3{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
+    mk = L3{V4(h0.q[3]), mk_y, mk_z};
+  } else {
+    fs = gather3(H, G.k, &LH::fs);
+  }
   rotate_into_plane4(fs, G.n);
   const L3 ft = spring4(fs, G.vt, par<kU>(P, G.p, &LP::kt), splat(in.dt), par<kU>(P, G.p, &LP::damp_t) * gamma,
                         par<kU>(P, G.p, &LP::mu), fc);
   // LinearNormal's contact radius, read only when asked for.
-  put(G, g, fn, ft, nullptr, in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0), out);
-  // The spring's record, 24 bytes: {x, y} then z of each lane (the force loop resets the
-  // records of contacts that ended: LaneOut::alive).
-  const Pairs xy = pairs(fs.x, fs.y);
-  alignas(32) double z[4];
-  _mm256_store_pd(z, __m256d(fs.z));
-  put_alive(alive, g, out);
-  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
-    double* const r = rec(H, G.k[l]);
-    _mm_storeu_pd(r, xy.p[l]);
-    r[2] = z[l];
-  });
+  const V4 a = in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0);
+  // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
+  if constexpr (kRoll) {
+    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
+                        par<kU>(P, G.p, &LP::damped), splat(in.dt));
+    put(G, g, alive, fn, ft, &mr, a, out);
+    store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
+  } else {
+    put(G, g, alive, fn, ft, nullptr, a, out);
+    // 24 bytes: {x, y} then z of each lane.
+    const Pairs xy = pairs(fs.x, fs.y);
+    alignas(32) double z[4];
+    _mm256_store_pd(z, __m256d(fs.z));
+    each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
+      double* const r = rec(H, G.k[l]);
+      _mm_storeu_pd(r, xy.p[l]);
+      r[2] = z[l];
+    });
+  }
 }
 
-/// One group of four contacts of Hertz-Mindlin + EPSD (after their geometry); kU: one material pair.
-template <bool kU>
-__attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
+/// One group of four contacts of Hertz-Mindlin (after their geometry); kU: one material pair;
+/// kRoll: with EPSD rolling resistance.
+template <bool kU, bool kRoll>
+__attribute__((target("avx2"), always_inline)) inline void hertz_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const HertzEpsdLaneParams*>(in.params);
-  auto* const H = static_cast<HertzEpsdLaneHistory*>(in.hist);
-  using LP = HertzEpsdLaneParams;
+  const auto* const P = static_cast<const HertzLaneParams*>(in.params);
+  using LH = std::conditional_t<kRoll, HertzEpsdLaneHistory, HertzLaneHistory>;
+  auto* const H = static_cast<LH*>(in.hist);
+  using LP = HertzLaneParams;
   const V4 dt = splat(in.dt);
   // HertzNormal (the lanes of ended contacts compute what no one reads).
   const M4 alive = G.delta > 0.0;
@@ -456,38 +523,47 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_epsd_group(
   const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
   const V4 fc = max0(fn);
   // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
+  // The records read whole, as they are written below: {fs, kt_prev} at 0 and, with
+  // rolling, {kt_prev, mk} at 24.
   const V4 kt = par<kU>(P, G.p, &LP::eight_Gstar) * a;
-  // The records read whole, as they are written below: lanes of {fs, kt_prev} at 0 and of
-  // {kt_prev, mk} at 24.
-  const Quads h0 = load_quads(H, G.k, 0), h1 = load_quads(H, G.k, 3);
+  const Quads h0 = load_quads(H, G.k, 0);
   L3 fs{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
   V4 kt_prev = V4(h0.q[3]);
   const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_kt) * gamma,
                              par<kU>(P, G.p, &LP::mu), fc);
-  L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
-  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
-                      par<kU>(P, G.p, &LP::damped), dt);
-  put(G, g, fn, ft, &mr, a, out);
-  // The record, 56 bytes: {fs, kt_prev} at 0 and {kt_prev, mk} at 24 (kt_prev written twice,
-  // the same value); the force loop resets those of contacts that ended.
+  // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
-  const Quads a1 = quads(kt_prev, mk.x, mk.y, mk.z);
-  put_alive(alive, g, out);
-  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
-    double* const r = rec(H, G.k[l]);
-    _mm256_storeu_pd(r, a0.q[l]);
-    _mm256_storeu_pd(r + 3, a1.q[l]);
-  });
+  if constexpr (kRoll) {
+    const Quads h1 = load_quads(H, G.k, 3);
+    L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
+    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
+                        par<kU>(P, G.p, &LP::damped), dt);
+    put(G, g, alive, fn, ft, &mr, a, out);
+    // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
+    store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
+  } else {
+    put(G, g, alive, fn, ft, nullptr, a, out);
+    store_records(G, H, At<Quads>{0, a0});
+  }
 }
 
-/// One group of four contacts of MEPA + EPSD (after their geometry); kU: one material pair.
-template <bool kU>
-__attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
+/// One group of four contacts of MEPA (after their geometry); kU: one material pair; kRoll:
+/// with EPSD rolling resistance.
+template <bool kU, bool kRoll>
+__attribute__((target("avx2"), always_inline)) inline void mepa_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const MepaEpsdLaneParams*>(in.params);
-  auto* const H = static_cast<MepaEpsdLaneHistory*>(in.hist);
-  using LP = MepaEpsdLaneParams;
+  const auto* const P = static_cast<const MepaLaneParams*>(in.params);
+  using LH = std::conditional_t<kRoll, MepaEpsdLaneHistory, MepaLaneHistory>;
+  auto* const H = static_cast<LH*>(in.hist);
+  using LP = MepaLaneParams;
   const V4 dt = splat(in.dt);
+  // The records read whole, as they are written below: lanes of {Dmax, Dp, branch, fs.x},
+  // then {fs, kt_prev} (without rolling; at 24, overlapping) or {fs.y, fs.z, kt_prev, mk.x}
+  // and {mk.y, mk.z} (with rolling; at 32 and 64), by transposing the four records' bytes.
+  const Quads h0 = load_quads(H, G.k, 0);
+  const Quads h1 = load_quads(H, G.k, kRoll ? 4 : 3);
+  V4 mk_y, mk_z;
+  if constexpr (kRoll) load_pairs(H, G.k, 8, mk_y, mk_z);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
   // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
   // bounded below by the adhesive -A.
@@ -497,11 +573,6 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
   const V4 D = d * dn1;
   const V4 A = par<kU>(P, G.p, &LP::kadh) * D;
   const V4 k1 = par<kU>(P, G.p, &LP::k1), k2 = par<kU>(P, G.p, &LP::k2);
-  // The records read whole, as they are written below: lanes of {Dmax, Dp, branch, fs.x},
-  // {fs.y, fs.z, kt_prev, mk.x} and {mk.y, mk.z} by transposing the four records' bytes.
-  const Quads h0 = load_quads(H, G.k, 0), h1 = load_quads(H, G.k, 4);
-  V4 mk_y, mk_z;
-  load_pairs(H, G.k, 8, mk_y, mk_z);
   const V4 Dmax = V4(h0.q[0]), Dp = V4(h0.q[1]);
   const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
   const M4 load = f2 >= f1;
@@ -521,52 +592,53 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_epsd_group(
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
   const V4 kt = sel(par<kU>(P, G.p, &LP::kt_const), par<kU>(P, G.p, &LP::kt_c),
                     par<kU>(P, G.p, &LP::kt_ratio) * k_load * par<kU>(P, G.p, &LP::kt_mult));
-  L3 fs{V4(h0.q[3]), V4(h1.q[0]), V4(h1.q[1])};
-  V4 kt_prev = V4(h1.q[2]);
+  L3 fs = kRoll ? L3{V4(h0.q[3]), V4(h1.q[0]), V4(h1.q[1])} : L3{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
+  V4 kt_prev = V4(h1.q[kRoll ? 2 : 3]);
   const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::gamma_t),
                              par<kU>(P, G.p, &LP::mu), fc);
-  L3 mk{V4(h1.q[3]), mk_y, mk_z};
-  const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
-                      par<kU>(P, G.p, &LP::damped), dt);
-  put(G, g, fn, ft, &mr, in.want_a ? sqrt4(G.rstar * d) : splat(0.0), out);
-  // The record, 80 bytes: {Dmax, Dp, branch, fs.x} at 0, {fs.y, fs.z, kt_prev, mk.x} at 32,
-  // {mk.y, mk.z} at 64 (the force loop resets those of contacts that ended). The branch is an
+  const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
+  // The records back (the force loop resets those of contacts that ended). The branch is an
   // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
   // stays zero as the scalar law leaves it.
   const M4 br = load ? M4{1, 1, 1, 1} : (adh ? M4{3, 3, 3, 3} : M4{2, 2, 2, 2});
   const Quads a0 = quads(Dmax1, Dp1, V4(br), fs.x);
-  const Quads a1 = quads(fs.y, fs.z, kt_prev, mk.x);
-  const Pairs a2 = pairs(mk.y, mk.z);
-  put_alive(alive, g, out);
-  each_lane(G, [&](const uint32_t l) __attribute__((target("avx2"), always_inline)) {
-    double* const r = rec(H, G.k[l]);
-    _mm256_storeu_pd(r, a0.q[l]);
-    _mm256_storeu_pd(r + 4, a1.q[l]);
-    _mm_storeu_pd(r + 8, a2.p[l]);
-  });
+  if constexpr (kRoll) {
+    L3 mk{V4(h1.q[3]), mk_y, mk_z};
+    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
+                        par<kU>(P, G.p, &LP::damped), dt);
+    put(G, g, alive, fn, ft, &mr, a, out);
+    // {Dmax, Dp, branch, fs.x} at 0, {fs.y, fs.z, kt_prev, mk.x} at 32, {mk.y, mk.z} at 64.
+    store_records(G, H, At<Quads>{0, a0}, At<Quads>{4, quads(fs.y, fs.z, kt_prev, mk.x)},
+                  At<Pairs>{8, pairs(mk.y, mk.z)});
+  } else {
+    put(G, g, alive, fn, ft, nullptr, a, out);
+    // {Dmax, Dp, branch, fs.x} at 0 and {fs, kt_prev} at 24 (fs.x written twice).
+    store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
+  }
 }
 
 }  // namespace
 
-__attribute__((target("avx2"))) void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,
-                                                       const uint32_t cnt, LaneOut& out) {
-  drive<linear_group<true>, linear_group<false>>(in, hits, h0, cnt, out);
-}
-
-__attribute__((target("avx2"))) void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
-                                                           const uint32_t h0, const uint32_t cnt, LaneOut& out) {
-  drive<hertz_epsd_group<true>, hertz_epsd_group<false>>(in, hits, h0, cnt, out);
-}
-
-__attribute__((target("avx2"))) void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits,
-                                                          const uint32_t h0, const uint32_t cnt, LaneOut& out) {
-  drive<mepa_epsd_group<true>, mepa_epsd_group<false>>(in, hits, h0, cnt, out);
-}
+#define COHDEM_LANES_ENTRY(name, group, roll)                                                                   \
+  __attribute__((target("avx2"))) void name(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,            \
+                                            const uint32_t cnt, LaneOut& out) {                                         \
+    drive<group<true, roll>, group<false, roll>>(in, hits, h0, cnt, out);                                               \
+  }
+COHDEM_LANES_ENTRY(linear_lanes_avx2, linear_group, false)
+COHDEM_LANES_ENTRY(linear_epsd_lanes_avx2, linear_group, true)
+COHDEM_LANES_ENTRY(hertz_lanes_avx2, hertz_group, false)
+COHDEM_LANES_ENTRY(hertz_epsd_lanes_avx2, hertz_group, true)
+COHDEM_LANES_ENTRY(mepa_lanes_avx2, mepa_group, false)
+COHDEM_LANES_ENTRY(mepa_epsd_lanes_avx2, mepa_group, true)
+#undef COHDEM_LANES_ENTRY
 
 #else
 
 void linear_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+void linear_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+void hertz_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 void hertz_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+void mepa_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 void mepa_epsd_lanes_avx2(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
 
 #endif

@@ -2,7 +2,8 @@
 # The benchmark inputs stay valid as the code changes (issue 6: "keep the benchmark script
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
-# steps, model_cost.py prints its four rows and instructions.py counts a small packing.
+# steps, model_cost.py prints its four rows, instructions.py counts a small packing and
+# contact_instructions.py the force loop's instructions per contact of two laws.
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
 set -u
@@ -58,5 +59,20 @@ top = r['top_functions'][0]
 in_loop = sum(t['per_particle_step'] for t in r['top_functions'] if loop(t['function']))
 ok = math.isfinite(n) and n > 0 and loop(top['function']) and in_loop > 0.5 * n
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   instructions.py"; else echo "FAIL instructions.py"; tail -5 "$work/ins.log"; fail=$((fail+1)); fi
+# contact_instructions.py end to end (one timed force-loop call per law under callgrind): a
+# positive count per contact for each law, the MEPA + EPSD law above the plain linear one
+# (it does strictly more per contact: the hysteresis branches and the rolling spring).
+bench_bin="$(dirname "$bin")/cohdem_bench"
+if [ -x "$bench_bin" ]; then
+  if python3 "$src/bench/contact_instructions.py" --models 'linear,mepa+epsd' --iters 1 --bench "$bench_bin" \
+       --json "$work/ci.json" > "$work/ci.log" 2>&1 &&
+     python3 -c "
+import json, math, sys
+c = json.load(open('$work/ci.json'))['instructions_per_contact']
+ok = all(math.isfinite(v) and v > 0 for v in c.values()) and c['mepa+epsd'] > c['linear']
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   contact_instructions.py"; else echo "FAIL contact_instructions.py"; tail -5 "$work/ci.log"; fail=$((fail+1)); fi
+else
+  echo "skip contact_instructions.py ($bench_bin not built: COHDEM_BUILD_BENCH=OFF)"
+fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -1,19 +1,21 @@
 // The contacts evaluated four at a time in AVX2 lanes (src/sim/lanes.hpp: the linear law,
-// Hertz-Mindlin with EPSD rolling) must give the scalar laws' results bit for bit: forces,
-// torques, histories and which contacts live, contact by contact, and so whole runs. Checked
-// on a bed that reaches every branch the scalar code has: two species with their own
-// parameters per material pair (linear: kt given or from kt_ratio; limit_damping on and off,
-// tangential damping; Hertz-Mindlin: two E* and G*, rolling damping on and off), frozen
-// partners, periodic images, histories turned out of the tangent plane by small and by large
-// angles, zero histories, sliding and sticking springs (tangential and rolling), tangential
-// stiffnesses that fell or rose since the last step, and live entries whose spheres have
-// parted (history reset).
+// Hertz-Mindlin and MEPA, each without and with EPSD rolling) must give the scalar laws'
+// results bit for bit: forces, torques, histories and which contacts live, contact by
+// contact, and so whole runs. Checked on a bed that reaches every branch the scalar code
+// has: two species with their own parameters per material pair (linear: kt given or from
+// kt_ratio; limit_damping on and off, tangential damping; Hertz-Mindlin: two E* and G*;
+// MEPA: n = 1 and 3/2, the Coulomb offset, three kt forms; rolling damping on and off),
+// frozen partners, periodic images, histories turned out of the tangent plane by small and
+// by large angles, zero histories, sliding and sticking springs (tangential and rolling),
+// tangential stiffnesses that fell or rose since the last step, MEPA's three branches, and
+// live entries whose spheres have parted (history reset).
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <string>
 
 #include "fixture.hpp"
 #include "sim/force_kernel.hpp"
@@ -27,42 +29,95 @@ namespace {
 
 constexpr double kL = 0.03;  // periodic cell in x and y, m
 
-enum class Law { Linear, HertzEpsd, MepaEpsd };
+enum class Law { Linear, LinearEpsd, Hertz, HertzEpsd, Mepa, MepaEpsd };
+
+bool rolls(const Law law) { return law == Law::LinearEpsd || law == Law::HertzEpsd || law == Law::MepaEpsd; }
+bool is_linear(const Law law) { return law == Law::Linear || law == Law::LinearEpsd; }
+bool is_mepa(const Law law) { return law == Law::Mepa || law == Law::MepaEpsd; }
+const char* name_of(const Law law) {
+  switch (law) {
+    case Law::Linear: return "linear";
+    case Law::LinearEpsd: return "linear + EPSD";
+    case Law::Hertz: return "Hertz-Mindlin";
+    case Law::HertzEpsd: return "Hertz-Mindlin + EPSD";
+    case Law::Mepa: return "MEPA";
+    case Law::MepaEpsd: return "MEPA + EPSD";
+  }
+  return "";
+}
+
+// A parameter set; EPSD's keys (mu_r, eta_r) left out for a law without rolling resistance.
+ParamSet law_params(const Law law, std::initializer_list<std::pair<const char*, double>> kv) {
+  ParamSet p;
+  for (auto& [k, v] : kv)
+    if (rolls(law) || (std::strcmp(k, "mu_r") != 0 && std::strcmp(k, "eta_r") != 0)) p.set(k, v);
+  return p;
+}
+
+// Where the lanes' history records (lanes.hpp) keep what the test sets and reads, in bytes:
+// the tangential spring, its last stiffness (none: npos), EPSD's spring (none: npos); MEPA's
+// Dmax, Dp, branch at 0, 8, 16.
+struct Layout {
+  size_t size, fs, kt_prev, mk;
+};
+constexpr size_t kNone = ~size_t(0);
+Layout layout_of(const Law law) {
+  switch (law) {
+    case Law::Linear: return {sizeof(LinearLaneHistory), 0, kNone, kNone};
+    case Law::LinearEpsd: return {sizeof(LinearEpsdLaneHistory), 0, kNone, offsetof(LinearEpsdLaneHistory, mk)};
+    case Law::Hertz: return {sizeof(HertzLaneHistory), 0, offsetof(HertzLaneHistory, kt_prev), kNone};
+    case Law::HertzEpsd:
+      return {sizeof(HertzEpsdLaneHistory), 0, offsetof(HertzEpsdLaneHistory, kt_prev), offsetof(HertzEpsdLaneHistory, mk)};
+    case Law::Mepa: return {sizeof(MepaLaneHistory), offsetof(MepaLaneHistory, fs), offsetof(MepaLaneHistory, kt_prev), kNone};
+    case Law::MepaEpsd:
+      return {sizeof(MepaEpsdLaneHistory), offsetof(MepaEpsdLaneHistory, fs), offsetof(MepaEpsdLaneHistory, kt_prev),
+              offsetof(MepaEpsdLaneHistory, mk)};
+  }
+  return {};
+}
 
 // 500 spheres of two species dropped onto a floor in a periodic cell (gravity 200 m/s^2, to
 // settle in a few thousand steps), one in ten frozen; material pairs with parameters of
 // their own.
 std::unique_ptr<System> make_bed(Law law, int threads) {
   std::unique_ptr<System> s;
-  if (law == Law::Linear) {
-    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", "none",
-                    params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}}), 1e-5, {0, 0, -200.0}, 3e-4);
-    // a-a: the defaults (kt = 2/7 kn); a-b: kt given, limit_damping, tangential damping;
-    // b-b: another restitution and friction, tangential damping.
-    const ParamSet aa = params({{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}});
-    const ParamSet ab = params({{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1}, {"damp_t", 0.5}});
-    const ParamSet bb = params({{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}});
-    s->set_model(make_contact_model("linear", "none"), {aa, ab, ab, bb});
-  } else if (law == Law::MepaEpsd) {
-    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "mepa", "epsd",
-                    params({{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
+  const char* const rolling = rolls(law) ? "epsd" : "none";
+  if (is_linear(law)) {
+    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", rolling,
+                    law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 1e-5, {0, 0, -200.0}, 3e-4);
+    // a-a: the defaults (kt = 2/7 kn), no rolling damping; a-b: kt given, limit_damping,
+    // tangential and rolling damping; b-b: another restitution and friction, tangential and
+    // rolling damping.
+    const ParamSet aa = law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
+    const ParamSet ab = law_params(law, {{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1},
+                                         {"damp_t", 0.5}, {"mu_r", 0.05}, {"eta_r", 0.3}});
+    const ParamSet bb =
+        law_params(law, {{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+    s->set_model(make_contact_model("linear", rolling), {aa, ab, ab, bb});
+  } else if (is_mepa(law)) {
+    s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "mepa", rolling,
+                    law_params(law, {{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
     // a-a: n = 3/2, adhesion, the tangent kt (kt_form 0), no rolling damping; a-b: n = 1,
     // the cohesion-offset Coulomb base, limit_damping, the secant kt (kt_form 1), rolling
     // damping; b-b: n = 3/2, a given kt, tangential and rolling damping.
-    const ParamSet aa = params({{"k1", 1e5}, {"k2", 5e5}, {"kadh", 2e4}, {"gamma_n", 0.02}, {"mu", 0.5}, {"mu_r", 0.1}});
-    const ParamSet ab = params({{"k1", 2e3}, {"k2", 6e3}, {"kadh", 500}, {"n", 1}, {"coulomb_offset", 1}, {"gamma_n", 0.01},
-                                {"limit_damping", 1}, {"kt_form", 1}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}});
-    const ParamSet bb = params({{"k1", 5e4}, {"k2", 4e5}, {"kadh", 1e4}, {"gamma_n", 0.03}, {"kt", 800}, {"damp_t", 0.5},
-                                {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
-    s->set_model(make_contact_model("mepa", "epsd"), {aa, ab, ab, bb});
+    const ParamSet aa =
+        law_params(law, {{"k1", 1e5}, {"k2", 5e5}, {"kadh", 2e4}, {"gamma_n", 0.02}, {"mu", 0.5}, {"mu_r", 0.1}});
+    const ParamSet ab =
+        law_params(law, {{"k1", 2e3}, {"k2", 6e3}, {"kadh", 500}, {"n", 1}, {"coulomb_offset", 1}, {"gamma_n", 0.01},
+                         {"limit_damping", 1}, {"kt_form", 1}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}});
+    const ParamSet bb =
+        law_params(law, {{"k1", 5e4}, {"k2", 4e5}, {"kadh", 1e4}, {"gamma_n", 0.03}, {"kt", 800}, {"damp_t", 0.5},
+                         {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+    s->set_model(make_contact_model("mepa", rolling), {aa, ab, ab, bb});
   } else {
-    s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", "epsd",
-                    params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
+    s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", rolling,
+                    law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
     // a-a: no rolling damping; a-b: limit_damping, rolling damping; b-b: others.
-    const ParamSet aa = params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
-    const ParamSet ab = params({{"e", 0.2}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"limit_damping", 1}, {"damp_t", 0.5}});
-    const ParamSet bb = params({{"e", 0.9}, {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
-    s->set_model(make_contact_model("hertz_mindlin", "epsd"), {aa, ab, ab, bb});
+    const ParamSet aa = law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
+    const ParamSet ab = law_params(
+        law, {{"e", 0.2}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"limit_damping", 1}, {"damp_t", 0.5}});
+    const ParamSet bb = law_params(law, {{"e", 0.9}, {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+    s->set_model(make_contact_model("hertz_mindlin", rolling), {aa, ab, ab, bb});
   }
   s->cfg.threads = threads;
   s->cfg.parallel_min = 0;
@@ -149,22 +204,30 @@ bool on_lanes(const System& s) {
   return LaneLaw<LawT>::kHave;
 }
 
+bool on_lanes_of(const Law law, const System& s) {
+  switch (law) {
+    case Law::Linear: return on_lanes<LinearLaw>(s);
+    case Law::LinearEpsd: return on_lanes<LinearEpsdLaw>(s);
+    case Law::Hertz: return on_lanes<HertzLaw>(s);
+    case Law::HertzEpsd: return on_lanes<HertzEpsdLaw>(s);
+    case Law::Mepa: return on_lanes<MepaLaw>(s);
+    case Law::MepaEpsd: return on_lanes<MepaEpsdLaw>(s);
+  }
+  return false;
+}
+
 // One force evaluation, scalar and in lanes, from the same state with histories set by hand
 // on every entry that touches and on some that do not (marked live: the law must end them).
 void contact_by_contact(Law law) {
   const bool was = screen_avx2_enabled();
   auto s = make_bed(law, 1);
-  ASSERT_TRUE(law == Law::Linear ? on_lanes<LinearLaw>(*s)
-              : law == Law::HertzEpsd ? on_lanes<HertzEpsdLaw>(*s) : on_lanes<MepaEpsdLaw>(*s));
+  ASSERT_TRUE(on_lanes_of(law, *s));
   s->run(3000);  // settling: contacts with histories, frozen partners, images
   auto& nl = s->nl;
-  // The records (lanes.hpp): fs, then kt_prev and mk with rolling; MEPA: Dmax, Dp, branch first.
   const size_t stride = s->model->state_size();
-  const size_t o_fs = law == Law::MepaEpsd ? offsetof(MepaEpsdLaneHistory, fs) : 0;
-  ASSERT_EQ(stride, law == Law::Linear     ? sizeof(LinearLaneHistory)
-                    : law == Law::HertzEpsd ? sizeof(HertzEpsdLaneHistory)
-                                            : sizeof(MepaEpsdLaneHistory));
-  const bool rolling = law != Law::Linear;
+  const Layout lay = layout_of(law);
+  ASSERT_EQ(stride, lay.size);
+  const bool rolling = lay.mk != kNone, stiff = lay.kt_prev != kNone;
   ASSERT_GE(nl.hist.data.size(), nl.jdx.size() * stride);
   const auto& P = s->particles;
   auto rec = [&](std::vector<std::byte>& d, size_t k) { return d.data() + k * stride; };
@@ -182,14 +245,16 @@ void contact_by_contact(Law law) {
       if (!touch && rng.uniform(0, 1) > 0.15) continue;
       const Vec3 n = d * (1.0 / dist);
       const Vec3 fs = random_history(rng, n, -9, 0, small_turn);
-      std::memcpy(rec(nl.hist.data, k) + o_fs, &fs, sizeof fs);
-      if (rolling) {
+      std::memcpy(rec(nl.hist.data, k) + lay.fs, &fs, sizeof fs);
+      if (stiff) {
         const double kt_prev = rng.uniform(0, 1) < 0.3 ? 0.0 : std::pow(10.0, rng.uniform(1, 4));
-        const Vec3 mk = random_history(rng, n, -12, -5, small_turn);
-        std::memcpy(rec(nl.hist.data, k) + o_fs + 24, &kt_prev, sizeof kt_prev);
-        std::memcpy(rec(nl.hist.data, k) + o_fs + 32, &mk, sizeof mk);
+        std::memcpy(rec(nl.hist.data, k) + lay.kt_prev, &kt_prev, sizeof kt_prev);
       }
-      if (law == Law::MepaEpsd && touch) {
+      if (rolling) {
+        const Vec3 mk = random_history(rng, n, -12, -5, small_turn);
+        std::memcpy(rec(nl.hist.data, k) + lay.mk, &mk, sizeof mk);
+      }
+      if (is_mepa(law) && touch) {
         // A plastic overlap of 0 to 1.5 delta^n (loading, un/reloading and the adhesive
         // branch all reached), its largest overlap at or above it.
         const double D = std::pow(P.radius[i] + P.radius[j] - dist, P.species[i] + P.species[j] == 1 ? 1.0 : 1.5);
@@ -224,20 +289,22 @@ void contact_by_contact(Law law) {
   for (size_t k = 0; k < nl.jdx.size(); ++k) {
     if (!a.live[k]) continue;
     Vec3 f0k, f1k;
-    std::memcpy(&f0k, rec(h0, k) + o_fs, sizeof f0k);
-    std::memcpy(&f1k, rec(a.hist, k) + o_fs, sizeof f1k);
+    std::memcpy(&f0k, rec(h0, k) + lay.fs, sizeof f0k);
+    std::memcpy(&f1k, rec(a.hist, k) + lay.fs, sizeof f1k);
     slid += norm2(f1k) < 0.25 * norm2(f0k);
     if (rolling) {
       Vec3 m0k, m1k;
-      double kp0, kp1;
-      std::memcpy(&m0k, rec(h0, k) + o_fs + 32, sizeof m0k);
-      std::memcpy(&m1k, rec(a.hist, k) + o_fs + 32, sizeof m1k);
-      std::memcpy(&kp0, rec(h0, k) + o_fs + 24, sizeof kp0);
-      std::memcpy(&kp1, rec(a.hist, k) + o_fs + 24, sizeof kp1);
+      std::memcpy(&m0k, rec(h0, k) + lay.mk, sizeof m0k);
+      std::memcpy(&m1k, rec(a.hist, k) + lay.mk, sizeof m1k);
       rolled += norm2(m1k) < 0.25 * norm2(m0k);
+    }
+    if (stiff) {
+      double kp0, kp1;
+      std::memcpy(&kp0, rec(h0, k) + lay.kt_prev, sizeof kp0);
+      std::memcpy(&kp1, rec(a.hist, k) + lay.kt_prev, sizeof kp1);
       softened += kp0 > kp1 && kp1 > 0;
     }
-    if (law == Law::MepaEpsd) {
+    if (is_mepa(law)) {
       int32_t br;
       std::memcpy(&br, rec(a.hist, k) + 16, sizeof br);
       ++branch[br & 3];
@@ -251,21 +318,17 @@ void contact_by_contact(Law law) {
   EXPECT_GT(small_turn, 100u);
   EXPECT_GT(frozen_partner, 20u);
   EXPECT_GT(slid, 100u);
-  if (rolling) {
-    EXPECT_GT(rolled, 100u);
-    EXPECT_GT(softened, 100u);
-  }
-  if (law == Law::MepaEpsd)
+  if (rolling) EXPECT_GT(rolled, 100u);
+  if (stiff) EXPECT_GT(softened, 100u);
+  if (is_mepa(law))
     for (int b = 1; b <= 3; ++b) EXPECT_GT(branch[b], 50u) << "MEPA branch " << b;
   // Bit for bit (memcmp: the sign of a zero counts).
   EXPECT_EQ(differing(a.f, b.f), 0u);
   EXPECT_EQ(differing(a.t, b.t), 0u);
   EXPECT_TRUE(a.live == b.live);
   EXPECT_TRUE(a.hist == b.hist);
-  report(law == Law::Linear      ? "lanes vs scalar, linear: particles with any differing force or torque bit"
-         : law == Law::HertzEpsd ? "lanes vs scalar, Hertz-Mindlin + EPSD: particles with any differing force or torque bit"
-                                 : "lanes vs scalar, MEPA + EPSD: particles with any differing force or torque bit",
-         double(differing(a.f, b.f) + differing(a.t, b.t)), 0.0, 0, "==");
+  const std::string what = std::string("lanes vs scalar, ") + name_of(law) + ": particles with any differing force or torque bit";
+  report(what.c_str(), double(differing(a.f, b.f) + differing(a.t, b.t)), 0.0, 0, "==");
 }
 
 // Whole runs (800 steps of the bed settling: thousands of contact-steps), scalar and in
@@ -297,35 +360,22 @@ void whole_runs(Law law) {
 
 }  // namespace
 
-TEST(Lanes, LinearLawContactByContactAsTheScalarLaw) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  contact_by_contact(Law::Linear);
-}
-
-TEST(Lanes, HertzMindlinEpsdContactByContactAsTheScalarLaw) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  contact_by_contact(Law::HertzEpsd);
-}
-
-TEST(Lanes, LinearLawRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  whole_runs(Law::Linear);
-}
-
-TEST(Lanes, HertzMindlinEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  whole_runs(Law::HertzEpsd);
-}
-
-TEST(Lanes, MepaEpsdContactByContactAsTheScalarLaw) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  contact_by_contact(Law::MepaEpsd);
-}
-
-TEST(Lanes, MepaEpsdRunsAsTheScalarLawOnOneAndTwoThreads) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";
-  whole_runs(Law::MepaEpsd);
-}
+#define COHDEM_LANES_TESTS(Name, law)                                                              \
+  TEST(Lanes, Name##ContactByContactAsTheScalarLaw) {                                             \
+    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone"; \
+    contact_by_contact(law);                                                                      \
+  }                                                                                               \
+  TEST(Lanes, Name##RunsAsTheScalarLawOnOneAndTwoThreads) {                                       \
+    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone"; \
+    whole_runs(law);                                                                              \
+  }
+COHDEM_LANES_TESTS(LinearLaw, Law::Linear)
+COHDEM_LANES_TESTS(LinearEpsd, Law::LinearEpsd)
+COHDEM_LANES_TESTS(HertzMindlin, Law::Hertz)
+COHDEM_LANES_TESTS(HertzMindlinEpsd, Law::HertzEpsd)
+COHDEM_LANES_TESTS(Mepa, Law::Mepa)
+COHDEM_LANES_TESTS(MepaEpsd, Law::MepaEpsd)
+#undef COHDEM_LANES_TESTS
 
 TEST(Lanes, MepaSettingsOutsideTheLanesRunTheScalarLaw) {
   // dp_shift and exponents other than 1 and 3/2 are the scalar law's alone (lane_usable).
