@@ -100,7 +100,7 @@ MepaLaneParams lane_params(const MepaEpsdLaw::Params& p);
 bool lane_usable(const MepaLaw::Params& p);
 bool lane_usable(const MepaEpsdLaw::Params& p);
 
-/// The laws' histories as the lanes read them (lane_history_layouts below checks them against
+/// The laws' histories as the lanes read them (same_layout below checks them against
 /// ContactLaw::State): the tangential spring, its last stiffness where it can fall, EPSD's
 /// spring; MEPA's largest and plastic overlaps and branch first.
 struct LinearLaneHistory { Vec3 fs; };
@@ -183,35 +183,35 @@ struct LaneLaw<MepaEpsdLaw> : LaneLawOf<MepaEpsdLaw, MepaLaneParams, mepa_epsd_l
   static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
 };
 
-/// The lane histories are the laws' State, byte for byte.
+/// The lane histories are the laws' State, byte for byte: the same size (std::bit_cast), the
+/// same fields (a last stiffness, EPSD's spring, MEPA's overlaps where the State has them)
+/// at the same places.
 template <class LH, class Law>
-constexpr bool same_layout(const bool mepa, const bool kt_prev, const bool mk) {
-  typename Law::State s{};
+constexpr bool same_layout() {
+  using S = typename Law::State;
+  constexpr bool kt = requires(S x) { x.tangential.kt_prev; }, mk = requires(S x) { x.rolling.mk; },
+                 mepa = requires(S x) { x.normal.Dmax; };
+  if (kt != requires(LH h) { h.kt_prev; } || mk != requires(LH h) { h.mk; } || mepa != requires(LH h) { h.Dmax; })
+    return false;
+  S s{};
   s.tangential.fs = {1, 2, 3};
-  if constexpr (requires { s.tangential.kt_prev; }) s.tangential.kt_prev = 4;
-  if constexpr (requires { s.rolling.mk; }) s.rolling.mk = {5, 6, 7};
-  if constexpr (requires { s.normal.Dmax; }) {
+  if constexpr (kt) s.tangential.kt_prev = 4;
+  if constexpr (mk) s.rolling.mk = {5, 6, 7};
+  if constexpr (mepa) {
     s.normal.Dmax = 8;
     s.normal.Dp = 9;
     s.normal.branch = 2;
   }
-  if (sizeof(LH) != sizeof(typename Law::State)) return false;
-  const auto h = std::bit_cast<LH>(s);
+  const LH h = std::bit_cast<LH>(s);
   bool ok = h.fs == Vec3{1, 2, 3};
-  if constexpr (requires { h.kt_prev; }) ok = ok && kt_prev && h.kt_prev == 4;
-  else ok = ok && !kt_prev;
-  if constexpr (requires { h.mk; }) ok = ok && mk && h.mk == Vec3{5, 6, 7};
-  else ok = ok && !mk;
-  if constexpr (requires { h.Dmax; }) ok = ok && mepa && h.Dmax == 8 && h.Dp == 9 && h.branch == 2;
-  else ok = ok && !mepa;
+  if constexpr (kt) ok = ok && h.kt_prev == 4;
+  if constexpr (mk) ok = ok && h.mk == Vec3{5, 6, 7};
+  if constexpr (mepa) ok = ok && h.Dmax == 8 && h.Dp == 9 && h.branch == 2;
   return ok;
 }
-static_assert(same_layout<LinearLaneHistory, LinearLaw>(false, false, false) &&
-                  same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>(false, false, true) &&
-                  same_layout<HertzLaneHistory, HertzLaw>(false, true, false) &&
-                  same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>(false, true, true) &&
-                  same_layout<MepaLaneHistory, MepaLaw>(true, true, false) &&
-                  same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(true, true, true),
+static_assert(same_layout<LinearLaneHistory, LinearLaw>() && same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>() &&
+                  same_layout<HertzLaneHistory, HertzLaw>() && same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>() &&
+                  same_layout<MepaLaneHistory, MepaLaw>() && same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(),
               "the lanes' histories must be the laws' State, byte for byte");
 
 }  // namespace cohdem
