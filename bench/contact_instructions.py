@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Instructions per contact of each contact law in the bulk force loop, counted with
-valgrind's callgrind on identical contacts, and each law's cost relative to the linear law:
-the instruction-count form of issue 6's "MEPA n = 3/2 with rolling resistance costs at most
+valgrind's callgrind on identical contacts, and each law's cost relative to the linear law
+and to the linear law with the same rolling resistance: the instruction-count form of issue 6's "MEPA n = 3/2 with rolling resistance costs at most
 1.3x the linear model", repeatable on any machine at any load.
 
-  python3 bench/contact_instructions.py                       # linear, linear+epsd, HM+epsd, MEPA+epsd
+  python3 bench/contact_instructions.py                       # the six laws with lanes
   python3 bench/contact_instructions.py --models 'linear,mepa+epsd' --iters 6 --json out.json
 
 The problem is BM_Force of build/cohdem_bench (bench/micro.cpp): 32,768 spheres in a simple
@@ -12,7 +12,8 @@ cubic lattice, slightly compressed, three contacts each in the half list (98,304
 every one touching), the same for every law; the force loop (screening, contacts, sums and
 each particle's finish) runs COHDEM_BENCH_ITERS times after five set-up steps. The count is
 the inclusive count of the law's ContactModelImpl::compute (every call: the set-up steps'
-and the timed ones', found from the call count callgrind reports) over calls x contacts.
+and the timed ones', found from the call count callgrind reports) over calls x contacts
+(the contacts from the benchmark's own counters).
 The AVX2 screening and lanes run where the CPU has AVX2 (as in a run); COHDEM_SIMD=0 in the
 environment counts the portable scalar code instead.
 
@@ -29,17 +30,22 @@ import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
-CONTACTS = 98304  # 32^3 spheres x 3 contacts in the half list (BM_Force/.../32)
 
 
 def count(bench, model, iters, work):
-    """(instructions per contact, calls of compute) for one BM_Force/<model>."""
+    """(instructions per contact, calls of compute, contacts) for one BM_Force/<model>."""
     out = os.path.join(work, "callgrind." + re.sub(r"[^a-z0-9]+", "_", model) + ".out")
     filt = "BM_Force/" + re.escape(model) + "/"
     env = dict(os.environ, COHDEM_BENCH_ITERS=str(iters))
     r = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", bench,
-                        f"--benchmark_filter={filt}"], capture_output=True, text=True, env=env, cwd=REPO)
-    if r.returncode != 0 or "BM_Force" not in r.stdout:
+                        f"--benchmark_filter={filt}", "--benchmark_format=json"],
+                       capture_output=True, text=True, env=env, cwd=REPO)
+    try:
+        b = json.loads(r.stdout)["benchmarks"][0]
+        contacts = round(b["particles"] * b["contacts_per_particle"])  # every one touching
+    except (ValueError, KeyError, IndexError):
+        b, contacts = None, 0
+    if r.returncode != 0 or b is None or contacts <= 0:
         sys.exit(f"{bench} --benchmark_filter={filt} under callgrind failed:\n{r.stderr[-2000:]}")
     # The calls of ContactModelImpl<...>::compute (the region's outlined body is a clone, not
     # counted apart) and their inclusive cost.
@@ -57,12 +63,12 @@ def count(bench, model, iters, work):
                     for m in [re.search(r"\((\d+)x\)", ln)] if m)
     if total is None or calls == 0:
         sys.exit(f"no ContactModelImpl::compute with its callers in {out}")
-    return total / (calls * CONTACTS), calls
+    return total / (calls * contacts), calls, contacts
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--models", default="linear,linear+epsd,hertz_mindlin+epsd,mepa,mepa+epsd",
+    ap.add_argument("--models", default="linear,linear+epsd,hertz_mindlin,hertz_mindlin+epsd,mepa,mepa+epsd",
                     help="comma-separated BM_Force tags (law, or law+rolling)")
     ap.add_argument("--iters", type=int, default=6, help="timed force-loop calls (COHDEM_BENCH_ITERS)")
     ap.add_argument("--bench", default=os.path.join(REPO, "build", "cohdem_bench"))
@@ -74,7 +80,7 @@ def main():
     rows = []
     with tempfile.TemporaryDirectory() as work:
         for m in models:
-            ipc, calls = count(a.bench, m, a.iters, work)
+            ipc, calls, contacts = count(a.bench, m, a.iters, work)
             rows.append((m, ipc, calls))
             print(f"  {m:22s} {ipc:8.1f} instructions per contact ({calls} force-loop calls)", flush=True)
     base = {m: ipc for m, ipc, _ in rows}
@@ -88,7 +94,7 @@ def main():
         print(f"{m:22s} {ipc:21.1f} {ratio(ipc, base.get('linear')):>10s} {ratio(ipc, like):>23s}")
     if a.json:
         with open(a.json, "w") as f:
-            json.dump({"contacts": CONTACTS, "iters": a.iters,
+            json.dump({"contacts": contacts, "iters": a.iters,
                        "instructions_per_contact": {m: ipc for m, ipc, _ in rows}}, f, indent=1)
 
 if __name__ == "__main__":

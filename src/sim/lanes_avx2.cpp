@@ -442,11 +442,18 @@ LANES_FN void store_records(const Group& G, H* h, const At<T>&... parts) {
   });
 }
 
-
-// The records' layouts the stores assume (ContactLaw::State, lanes.hpp's static_assert).
+// The records' layouts that the loads and stores below assume by their offsets (lanes.hpp's
+// same_layout checks the records against the laws' State).
 static_assert(sizeof(LinearLaneHistory) == 24 && offsetof(LinearLaneHistory, fs) == 0);
+static_assert(sizeof(LinearEpsdLaneHistory) == 48 && offsetof(LinearEpsdLaneHistory, fs) == 0 &&
+              offsetof(LinearEpsdLaneHistory, mk) == 24);
+static_assert(sizeof(HertzLaneHistory) == 32 && offsetof(HertzLaneHistory, fs) == 0 &&
+              offsetof(HertzLaneHistory, kt_prev) == 24);
 static_assert(sizeof(HertzEpsdLaneHistory) == 56 && offsetof(HertzEpsdLaneHistory, fs) == 0 &&
               offsetof(HertzEpsdLaneHistory, kt_prev) == 24 && offsetof(HertzEpsdLaneHistory, mk) == 32);
+static_assert(sizeof(MepaLaneHistory) == 56 && offsetof(MepaLaneHistory, Dp) == 8 &&
+              offsetof(MepaLaneHistory, branch) == 16 && offsetof(MepaLaneHistory, fs) == 24 &&
+              offsetof(MepaLaneHistory, kt_prev) == 48);
 static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory, Dp) == 8 &&
               offsetof(MepaEpsdLaneHistory, branch) == 16 && offsetof(MepaEpsdLaneHistory, fs) == 24 &&
               offsetof(MepaEpsdLaneHistory, kt_prev) == 48 && offsetof(MepaEpsdLaneHistory, mk) == 56);
