@@ -95,6 +95,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     p.permute(cell_list_);
     bin();
   }
+  one_species = n > 0 ? p.species[0] : -1;
+  for (size_t i = 1; i < n && one_species >= 0; ++i)
+    if (p.species[i] != one_species) one_species = -1;
   attached.clear();
   for (size_t i = 0; i < n; ++i)
     if (p.flag[i] == kAttached) attached.push_back(uint32_t(i));

@@ -108,6 +108,10 @@ class NeighborList {
   /// Particles with wall entries or attached to a wall at the build, ascending: the only ones
   /// the wall totals (System::compute_forces) read.
   std::vector<uint32_t> wall_linked;
+  /// The species every particle had at the build, or -1 when they differ (or there are
+  /// none): with one, every pair's material parameters are the same, and the force loop
+  /// reads no species (species change only with a rebuild: adding or removing particles).
+  int32_t one_species = -1;
 
   std::array<Vec3, 27> shift{};  ///< image translations, code (sx+1)*9 + (sy+1)*3 + (sz+1)
   NeighborStats stats;

@@ -99,12 +99,20 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const Vec3 grav = c.gravity;
   // The material pairs' parameters, read through locals: through `this` they were reloaded
   // after every contact's stores.
-  const Params* const __restrict params = params_.data();
-  const size_t nmat = size_t(n_);
+  // One particle species at the build (NeighborList::one_species): every pair has the
+  // parameters of (s, s), read without the species of i and j (for a gas or bed of one
+  // material beside wall materials, the species loads were cache misses at 10^6 particles).
+  const size_t nmat_all = size_t(n_);
+  const long s1 = nl.one_species >= 0 && size_t(nl.one_species) < nmat_all && nl.has_reference(size_t(n))
+                      ? long(nl.one_species)
+                      : -1;
+  const size_t pair_1 = s1 >= 0 ? size_t(s1) * nmat_all + size_t(s1) : 0;
+  const Params* const __restrict params = params_.data() + pair_1;
+  const size_t nmat = s1 >= 0 ? 1 : nmat_all;  // one: index 0 of `params` for every pair
   // The lanes' reading of the material pairs' parameters (set_params), null where the scalar
   // law runs.
   using Lanes = LaneLaw<Law>;
-  const void* const lane_p = lanes_.empty() ? nullptr : lanes_.data();
+  const void* const lane_p = lanes_.empty() ? nullptr : lanes_.data() + pair_1;
   double* const a_pair = c.a_pair;  // read once, not reloaded after every contact's stores
   const bool want_a = a_pair != nullptr;
   const bool keep_pair = c.keep_pair;
@@ -277,7 +285,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         g.wrel = omega[i] - omega[j];
         g.dt = dt;
         g.want_a = want_a;
-        const bool alive = Law::evaluate(params[size_t(species[i]) * nmat + size_t(species[j])], g, hs[k], out);
+        const size_t pq = nmat == 1 ? 0 : size_t(species[i]) * nmat + size_t(species[j]);
+        const bool alive = Law::evaluate(params[pq], g, hs[k], out);
         put(k, i, j, alive, out.f, out.ti, out.tj, out.a, false);
       }
     };

@@ -153,6 +153,73 @@ TEST(Threads, ScalarAndAvx2ScreeningGiveIdenticalStates) {
          0.0, 0, "==");
 }
 
+namespace {
+// 300 spheres of one species, `sp`, among the materials `mats` (the walls of material `wm`),
+// Hertz-Mindlin with EPSD rolling: the force loop's one-species path (NeighborList::
+// one_species) reads the pair (sp, sp) without any species.
+State run_species(std::vector<Material> mats, int sp, int wm, int threads) {
+  const double L = 0.04;
+  auto s = make_system(std::move(mats), "hertz_mindlin", "epsd",
+                       params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"eta_r", 0.3}}), 5e-6, {0, 0, -9.81}, 2e-4);
+  s->cfg.threads = threads;
+  s->cfg.parallel_min = 0;
+  s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, wm));
+  s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, wm));
+  s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, wm));
+  s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, wm));
+  s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, wm));
+  InsertSpec spec;
+  spec.region.kind = Region::Kind::Box;
+  spec.region.lo = {0, 0, 0};
+  spec.region.hi = {L, L, 0.018};
+  spec.size.kind = SizeDistribution::Kind::Uniform;
+  spec.size.rmin = 1.5e-3;
+  spec.size.rmax = 2.0e-3;
+  spec.count = 300;
+  spec.species = sp;
+  EXPECT_EQ(s->insert(spec), 300u);
+  Rng rng(3);
+  for (auto& v : s->particles.v) v = {rng.normal(), rng.normal(), rng.normal()};
+  s->prepare();
+  EXPECT_EQ(s->nl.one_species, sp);
+  size_t contacts = 0;
+  s->run(300, [&](const System& sys) { contacts += sys.contact_count(); });
+  State st = state_of(*s);
+  st.contacts = contacts;
+  return st;
+}
+}  // namespace
+
+// Particles all of one species among several materials take the one-species path, which
+// reads the parameters of the pair (s, s) once instead of each pair's species: the run must
+// be bit-identical to the same particles with that material alone (where the pair is the
+// only one), in the lanes and in the scalar law, on one and two threads; and must differ
+// from the other material's run (the path did pick the pair (s, s), not the first one).
+TEST(Threads, OneSpeciesAmongSeveralMaterialsReadsItsOwnPair) {
+  const Material glass{"glass", 2500, 5e7, 0.25}, steel{"steel", 7800, 2e8, 0.3};
+  const bool was = screen_avx2_enabled();
+  for (const bool simd : {true, false}) {
+    set_screen_avx2(simd);
+    for (const int threads : {1, 2}) {
+      const State alone = run_species({steel}, 0, 0, threads);
+      const State among = run_species({glass, steel}, 1, 1, threads);
+      const State other = run_species({glass}, 0, 0, threads);
+      EXPECT_GT(alone.contacts, 5000u);
+      ASSERT_EQ(alone.id, among.id);
+      size_t differ = 0, differ_other = 0;
+      for (size_t i = 0; i < alone.x.size(); ++i) {
+        differ += !(alone.x[i] == among.x[i] && alone.v[i] == among.v[i] && alone.w[i] == among.w[i]);
+        differ_other += !(alone.x[i] == other.x[i] && alone.v[i] == other.v[i]);
+      }
+      EXPECT_EQ(differ, 0u) << "simd " << simd << ", " << threads << " threads";
+      EXPECT_TRUE(alone.wall_force == among.wall_force);
+      EXPECT_GT(differ_other, alone.x.size() / 2);
+    }
+  }
+  set_screen_avx2(was);
+  omp_set_num_threads(1);
+}
+
 TEST(Threads, ThreeThreadsAndRecordedContactsGiveIdenticalStates) {
   const State a = run(1), b = run(3), c = run(2, true), d = run(1, true);
   omp_set_num_threads(1);
