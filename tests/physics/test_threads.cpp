@@ -26,20 +26,22 @@ struct State {
   int threads = 0;
 };
 
-// 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run.
-std::unique_ptr<System> make_box(int threads, bool record) {
+// 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run:
+// of glass alone, or of species `sp` among the materials `mats`, with walls of material `wm`.
+std::unique_ptr<System> make_box(int threads, bool record, std::vector<Material> mats = {{"glass", 2500, 5e7, 0.25}},
+                                 int sp = 0, int wm = 0) {
   const double L = 0.04;
-  auto s = make_system({{"glass", 2500, 5e7, 0.25}}, "hertz_mindlin", "epsd",
+  auto s = make_system(std::move(mats), "hertz_mindlin", "epsd",
                        params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"eta_r", 0.3}}), 5e-6, {0, 0, -9.81}, 2e-4);
   s->cfg.threads = threads;
   s->cfg.parallel_min = 0;  // run the parallel loops even for these few particles
   s->cfg.record_contacts = record;
   // A box open at the top: floor and four sides.
-  s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
-  s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, 0));
-  s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, 0));
-  s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, 0));
-  s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, 0));
+  s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, wm));
+  s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, wm));
+  s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, wm));
+  s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, wm));
+  s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, wm));
   InsertSpec spec;
   spec.region.kind = Region::Kind::Box;
   spec.region.lo = {0, 0, 0};
@@ -48,6 +50,7 @@ std::unique_ptr<System> make_box(int threads, bool record) {
   spec.size.rmin = 1.5e-3;
   spec.size.rmax = 2.0e-3;
   spec.count = 300;
+  spec.species = sp;
   EXPECT_EQ(s->insert(spec), 300u);
   Rng rng(3);
   for (auto& v : s->particles.v) v = {rng.normal(), rng.normal(), rng.normal()};
@@ -154,33 +157,11 @@ TEST(Threads, ScalarAndAvx2ScreeningGiveIdenticalStates) {
 }
 
 namespace {
-// 300 spheres of one species, `sp`, among the materials `mats` (the walls of material `wm`),
-// Hertz-Mindlin with EPSD rolling: the force loop's one-species path (NeighborList::
-// one_species) reads the pair (sp, sp) without any species.
+// The box of spheres of one species, `sp`, among the materials `mats` (walls of material
+// `wm`): the force loop's one-species path (NeighborList::one_species) reads the pair
+// (sp, sp) without any species.
 State run_species(std::vector<Material> mats, int sp, int wm, int threads) {
-  const double L = 0.04;
-  auto s = make_system(std::move(mats), "hertz_mindlin", "epsd",
-                       params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"eta_r", 0.3}}), 5e-6, {0, 0, -9.81}, 2e-4);
-  s->cfg.threads = threads;
-  s->cfg.parallel_min = 0;
-  s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, wm));
-  s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, wm));
-  s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, wm));
-  s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, wm));
-  s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, wm));
-  InsertSpec spec;
-  spec.region.kind = Region::Kind::Box;
-  spec.region.lo = {0, 0, 0};
-  spec.region.hi = {L, L, 0.018};
-  spec.size.kind = SizeDistribution::Kind::Uniform;
-  spec.size.rmin = 1.5e-3;
-  spec.size.rmax = 2.0e-3;
-  spec.count = 300;
-  spec.species = sp;
-  EXPECT_EQ(s->insert(spec), 300u);
-  Rng rng(3);
-  for (auto& v : s->particles.v) v = {rng.normal(), rng.normal(), rng.normal()};
-  s->prepare();
+  auto s = make_box(threads, false, std::move(mats), sp, wm);
   EXPECT_EQ(s->nl.one_species, sp);
   size_t contacts = 0;
   s->run(300, [&](const System& sys) { contacts += sys.contact_count(); });
