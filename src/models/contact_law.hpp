@@ -35,7 +35,8 @@ struct ContactLaw {
     typename R::Params rolling;
     typename W::Params twisting;
   };
-  /// History of one contact, stored per id pair (lower id is i). Empty sub-states take no room.
+  /// History of one contact, seen from the particle that holds the pair's row (i). Empty
+  /// sub-states take no room.
   struct State {
     [[no_unique_address]] typename N::State normal;
     [[no_unique_address]] typename D::State damping;
@@ -43,6 +44,27 @@ struct ContactLaw {
     [[no_unique_address]] typename R::State rolling;
     [[no_unique_address]] typename W::State twisting;
   };
+
+  /// The history as seen from the other particle, i and j exchanged (the neighbor list does
+  /// this when a re-sort reverses which of the two holds the pair's row). Every sub-model with
+  /// a history says how it reads from the other side (`static void flip(State&)`: a force or
+  /// moment on i changes sign, overlaps and other scalars of the pair do not); one without
+  /// flip() must keep none, checked here.
+  static void flip(State& s) {
+    auto one = [](auto* tag, auto& ss) {
+      using X = std::remove_pointer_t<decltype(tag)>;
+      if constexpr (requires { X::flip(ss); })
+        X::flip(ss);
+      else
+        static_assert(std::is_empty_v<std::remove_reference_t<decltype(ss)>>,
+                      "a sub-model with a history must say how it reads from the other particle (flip)");
+    };
+    one((N*)nullptr, s.normal);
+    one((D*)nullptr, s.damping);
+    one((T*)nullptr, s.tangential);
+    one((R*)nullptr, s.rolling);
+    one((W*)nullptr, s.twisting);
+  }
 
   static std::vector<ParamSpec> specs() {
     std::vector<ParamSpec> v;

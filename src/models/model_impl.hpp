@@ -55,6 +55,14 @@ class ContactModelImpl final : public ContactModel {
     std::memcpy(state, &s, sizeof(State));
     return alive;
   }
+  void flip_state(void* state) const override { flip_history(state); }
+  FlipFn flipper() const override { return &flip_history; }
+  static void flip_history(void* state) {
+    State s;
+    std::memcpy(&s, state, sizeof(State));
+    Law::flip(s);
+    std::memcpy(state, &s, sizeof(State));
+  }
   std::vector<std::string> state_names() const override { return Law::state_names(); }
   void state_values(int i, int j, const void* state, double* out) const override {
     State s;

@@ -108,8 +108,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         shift[(sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)] = {sx * L.x, sy * L.y, sz * L.z};
 
   // 4. Pairs, straight into CSR rows: particle i scans its 27 neighbouring cells and keeps the
-  //    partners with a higher id (so each pair is found once, in the row of its lower id,
-  //    and the history frame never flips). Row order: cells in scan order, then cell order.
+  //    partners with a higher index (so each pair is found once, in the row of its lower
+  //    index). Row order: cells in scan order, then cell order.
   //    Parallel: each thread fills its own buffers for a contiguous block of rows; the
   //    blocks are then concatenated in order, so the lists do not depend on the threads.
   start.resize(n + 1);
@@ -138,7 +138,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   for (size_t a = a0; a < a1; ++a) {
     const size_t ca = cell_of_[a];
     const int cx = int(ca % nc[0]), cy = int((ca / nc[0]) % nc[1]), cz = int(ca / (size_t(nc[0]) * nc[1]));
-    const uint64_t ida = id[a];
     const bool fixed_a = flag[a] != kFree;
     const Vec3 xa = x[a];
     const double ra = rad[a] + skin + reach;
@@ -147,7 +146,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       const Vec3 sh = shift[img];
       for (uint32_t q = q0; q < q1; ++q) {
         const uint32_t b = cell_list_[q];
-        if (id[b] <= ida) continue;                 // found from b's side (or b == a)
+        if (b <= a) continue;                       // found from b's side (or b == a)
         if (fixed_a && flag[b] != kFree) continue;  // two fixed bodies
         const Vec3 d = xa - (x[b] + sh);
         const double rc = ra + rad[b];
@@ -248,7 +247,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     if (wstart[i + 1] > wstart[i] || flag[i] == kAttached) wall_linked.push_back(uint32_t(i));
   }
 
-  // 6. Carry history over: the old row of a pair's lower-id particle holds it, if anywhere.
+  // 6. Carry history over: the old row of the pair's particle with the lower old index holds
+  //    it, if anywhere; when that is the particle now in the other place (a re-sort swapped
+  //    the two), the history is rewritten as seen from the new row's particle (hist.flip).
   //    Old local indices are found by id (a direct table while ids are dense, as they are
   //    when the System numbers them; a sorted table otherwise).
   hist.data.assign(np * hist.stride, std::byte{0});
@@ -277,13 +278,13 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       auto it = std::lower_bound(sorted.begin(), sorted.end(), std::pair<uint64_t, uint32_t>{pid, 0});
       return it != sorted.end() && it->first == pid ? it->second : UINT32_MAX;
     };
-    uint64_t found = 0, wfound = 0;
+    uint64_t found = 0, wfound = 0, flipped = 0;
     const size_t hs = hist.stride, ws = whist.stride;
     // Rows are independent (each writes only its own entries' history), so the threads take
     // blocks of them: the same writes on any number of threads. Serial, this loop was the
     // largest serial part of a build (the chute on two threads, 49 builds: 0.11 s of a
     // 3.7 s loop; 0.05 s spread over both).
-#pragma omp parallel for reduction(+ : found, wfound) schedule(static) if (long(n) > parallel_min)
+#pragma omp parallel for reduction(+ : found, wfound, flipped) schedule(static) if (long(n) > parallel_min)
     for (size_t i = 0; i < n; ++i) {
       const uint32_t io = old_index(id[i]);
       if (io == UINT32_MAX) continue;
@@ -291,9 +292,16 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
           const uint32_t jo = old_index(id[jdx[k]]);
           if (jo == UINT32_MAX) continue;
-          for (uint32_t kk = old_start_[io]; kk < old_start_[io + 1]; ++kk)
-            if (old_jdx_[kk] == jo && old_live_[kk]) {
-              std::memcpy(hist.data.data() + k * hs, old_hist_.data() + size_t(kk) * hs, hs);
+          const bool swapped = jo < io;  // the pair was in j's old row, seen from j
+          const uint32_t row = swapped ? jo : io, other = swapped ? io : jo;
+          for (uint32_t kk = old_start_[row]; kk < old_start_[row + 1]; ++kk)
+            if (old_jdx_[kk] == other && old_live_[kk]) {
+              std::byte* const rec = hist.data.data() + k * hs;
+              std::memcpy(rec, old_hist_.data() + size_t(kk) * hs, hs);
+              if (swapped) {
+                if (hist.flip) hist.flip(rec);
+                ++flipped;
+              }
               hist.live[k] = 1;
               ++found;
               break;
@@ -311,6 +319,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
             }
     }
     stats.lost_contacts += (old_live - std::min(old_live, found)) + (old_wlive - std::min(old_wlive, wfound));
+    stats.flipped += flipped;
     if (dense)
       for (size_t k = 0; k < old_n; ++k) if (old_ids_[k] != UINT64_MAX) old_of_id_[old_ids_[k]] = UINT32_MAX;
   }

@@ -3,14 +3,18 @@
 //
 // - Cells are at least (2 r_max + skin + reach) wide, so any size ratio is handled (each
 //   pair is tested against its own cutoff r_i + r_j + skin + reach).
-// - Each pair is stored once, oriented so that i has the LOWER id: the history (tangential
-//   spring, plastic overlap, ...) lives in one frame and never flips sign.
+// - Each pair is stored once, in the row of the particle with the LOWER index (i < j): every
+//   pair of particle q lies in rows up to q's own, so the force loop can finish q (sum its
+//   forces, kick, drift) as soon as its own row is done, whatever the particles' ids. The
+//   history (tangential spring, plastic overlap, ...) is kept as seen from i.
 // - Rows are CSR by i; a transposed index lets the force gather run per particle in a fixed
 //   order, so results do not depend on the number of threads.
 // - History is kept for live contacts only and carried over at each rebuild by matching
-//   (id_i, id_j): the old row of the lower id is scanned for the partner (ids map to old
-//   rows through a table), so it survives rebuilds, re-sorting and (later) MPI
-//   migration. Wall contacts are keyed by (particle id, wall index).
+//   (id_i, id_j): the old row of whichever of the two had the lower index is scanned for the
+//   other (ids map to old rows through a table), so it survives rebuilds, re-sorting and
+//   (later) MPI migration. When a re-sort has swapped the two's order, the history is
+//   rewritten as seen from the other side (HistoryArray::flip, the contact law's). Wall
+//   contacts are keyed by (particle id, wall index).
 // - Periodic images: positions are wrapped at rebuilds only; each pair stores the image
 //   code of j so distances need no minimum-image test in the force loop.
 #pragma once
@@ -40,6 +44,9 @@ struct HistoryArray {
   size_t stride = 0;              ///< bytes per contact (ContactModel::state_size)
   std::vector<std::byte> data;    ///< one slot per list entry
   std::vector<uint8_t> live;      ///< 1 while the contact exists
+  /// Rewrites one record as seen from the other particle (ContactModel::flipper; null: the
+  /// records read the same from either side, as the tests' plain bytes do).
+  void (*flip)(void*) = nullptr;
   void resize(size_t n) { data.assign(n * stride, std::byte{0}); live.assign(n, 0); }
   void* at(size_t k) { return data.data() + k * stride; }
 };
@@ -78,6 +85,7 @@ struct Drift {
 struct NeighborStats {
   uint64_t builds = 0;
   uint64_t lost_contacts = 0;  ///< live contacts whose pair left the list (should stay 0)
+  uint64_t flipped = 0;        ///< histories carried over from the other particle's row (re-sorts)
 };
 
 /// Image code of a partner seen in place: shift[kNoShift] is (+0, +0, +0).
@@ -85,14 +93,15 @@ inline constexpr uint8_t kNoShift = 13;
 
 class NeighborList {
  public:
-  // Pair rows (CSR by i, i has the lower id).
+  // Pair rows (CSR by i, i has the lower index).
   std::vector<uint32_t> start;   ///< n+1 offsets
   std::vector<uint32_t> jdx;     ///< partner j
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
   std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
   /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
-  /// kernel finishes a particle once rows dep_lo..dep_hi are done.
+  /// kernel finishes a particle once rows dep_lo..dep_hi are done. With pairs in the row of
+  /// their lower index, dep_hi of a particle is its own row.
   std::vector<uint32_t> dep_lo, dep_hi;
   HistoryArray hist;
 

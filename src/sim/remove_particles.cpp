@@ -1,5 +1,6 @@
 // System::remove_particles: deleting particles renumbers the survivors, so the pair and wall
-// lists are compacted to the new numbering first (their contact history rides along); the next
+// lists are compacted to the new numbering first (their contact history rides along; the
+// survivors keep their order, so every pair stays in the row of its lower index); the next
 // neighbor build then carries the history over by id as usual.
 #include <cstring>
 #include <stdexcept>
@@ -13,6 +14,7 @@ namespace {
 /// History of the list entries `kept` (old entry indices, in their new order).
 void compact_history(const HistoryArray& old, HistoryArray& nu, const std::vector<uint32_t>& kept) {
   nu.stride = old.stride;
+  nu.flip = old.flip;
   nu.resize(kept.size());
   for (size_t q = 0; q < kept.size(); ++q) {
     std::memcpy(nu.at(q), old.data.data() + size_t(kept[q]) * old.stride, old.stride);

@@ -33,6 +33,7 @@ void System::set_model(std::unique_ptr<ContactModel> m, const std::vector<ParamS
   m->set_params(n, pair_params, mats);
   model = std::move(m);
   nl.hist.stride = nl.whist.stride = model->state_size();
+  nl.hist.flip = model->flipper();
   dirty_ = true;
 }
 
@@ -116,11 +117,17 @@ void System::install_pending() {
   for (size_t q = 0; q < pending_.pair_keys.size(); ++q) pk[pending_.pair_keys[q]] = q;
   for (size_t q = 0; q < pending_.wall_keys.size(); ++q) wk[pending_.wall_keys[q]] = q;
   size_t found = 0;
+  // A pair saved from the other side (its two particles in the other order: a checkpoint
+  // whose lists held it in the other's row) is rewritten as seen from this row's particle.
   for (size_t i = 0; i + 1 < nl.start.size(); ++i)
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
-      auto it = pk.find({particles.id[i], particles.id[nl.jdx[k]]});
+      const uint64_t a = particles.id[i], b = particles.id[nl.jdx[k]];
+      auto it = pk.find({a, b});
+      const bool swapped = it == pk.end();
+      if (swapped) it = pk.find({b, a});
       if (it == pk.end()) continue;
       std::memcpy(nl.hist.at(k), pending_.pair_data.data() + it->second * st, st);
+      if (swapped && nl.hist.flip) nl.hist.flip(nl.hist.at(k));
       nl.hist.live[k] = 1;
       ++found;
     }

@@ -14,6 +14,12 @@
 // the spring sticking and the EPSD spring at its limit); sphere B sits on a frozen sphere C
 // and is nudged sideways, so its pair contact carries a sticking tangential spring and a
 // loaded rolling spring while it begins to roll over.
+//
+// A pair lives in the row of the particle with the lower index. B is added before C (B holds
+// the pair's row), and the cell sort puts C, lower in z, before B: the first forced re-sort
+// moves the pair to C's row and its history must be rewritten as seen from C (the springs change sign).
+// The forces must still be the reference's bit for bit (the contact law is evaluated from the
+// other side, with the same magnitudes), and the flip must have happened (NeighborStats).
 #include <gtest/gtest.h>
 
 #include <string>
@@ -38,7 +44,7 @@ enum class Mode {
 
 struct Trace {
   std::vector<Vec3> fa, ta, fb, tb;  // force (minus weight) and torque on A and B per step
-  uint64_t builds = 0, lost = 0;
+  uint64_t builds = 0, lost = 0, flipped = 0;
   bool permuted = false;  // A or B changed local index at some point
 };
 
@@ -50,11 +56,16 @@ Trace run(const std::string& model, Mode mode) {
   s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
   s->add_particle(0, kR, {0, 0, kR}, {0.02, 0, 0});                   // A (id 0)
   // C and B lie at lower x than A: the cell sort puts them first, so re-sorting moves A.
-  const size_t c = s->add_particle(0, kR, {-0.1, 0, kR});               // C (id 1), frozen
+  s->add_particle(0, kR, {-0.1, 0, 3 * kR}, {0.01, 0, 0});              // B (id 1)
+  const size_t c = s->add_particle(0, kR, {-0.1, 0, kR});               // C (id 2), frozen
   s->particles.flag[c] = kFrozen;
-  s->add_particle(0, kR, {-0.1, 0, 3 * kR}, {0.01, 0, 0});              // B (id 2)
+  // Two frozen particles out of reach (ids 3 and 4, between C and A; walls leave frozen
+  // particles alone) span z from -0.6 kR to 5 kR: two layers of cells (at least 2.5 kR each),
+  // whose boundary, at 2.2 kR, lies between C and B, so the cell sort puts C before B.
+  for (const Vec3& x : {Vec3{-0.05, 0, -0.6 * kR}, Vec3{-0.05, 0, 5 * kR}})
+    s->particles.flag[s->add_particle(0, kR, x)] = kFrozen;
   if (mode == Mode::Natural) {
-    // Far particles (ids 3..6), at lower x than A-C (so the cell sort puts them first), flying
+    // Far particles (ids 5..8), at lower x than A-C (so the cell sort puts them first), flying
     // off upwards and sideways at 6 m/s: relative to the frozen C they move ~6.2 m/s, so the
     // list is rebuilt every ~skin/6.2 m/s ~ 0.8 ms (NeighborList::needs_rebuild), and as they
     // change cells the sort order changes.
@@ -73,8 +84,8 @@ Trace run(const std::string& model, Mode mode) {
         s->nl.whist.resize(s->nl.wall_entry_count());
       }
     }
-    const size_t a = index_of(*s, 0), b = index_of(*s, 2);
-    tr.permuted = tr.permuted || a != 0 || b != 2;
+    const size_t a = index_of(*s, 0), b = index_of(*s, 1);
+    tr.permuted = tr.permuted || a != 0 || b != 1;
     const Vec3 w = s->cfg.gravity * m;
     tr.fa.push_back(s->particles.force[a] - w);
     tr.ta.push_back(s->particles.torque[a]);
@@ -83,6 +94,7 @@ Trace run(const std::string& model, Mode mode) {
   }
   tr.builds = s->nl.stats.builds;
   tr.lost = s->nl.stats.lost_contacts;
+  tr.flipped = s->nl.stats.flipped;
   return tr;
 }
 
@@ -112,6 +124,11 @@ TEST(History, SurvivesRebuildsAndResorting) {
       EXPECT_GT(t.builds, 50u) << tag;
       EXPECT_EQ(t.lost, 0u) << tag;
       if (mode != Mode::Forced) EXPECT_TRUE(t.permuted) << tag << ": re-sorting did not move A or B";
+      // The first re-sort of the forced mode comes with B and C in contact (the natural
+      // mode's first sort is at the start, before they touch).
+      if (mode == Mode::ForcedResort)
+        EXPECT_GT(t.flipped, 0u) << tag << ": no history was read from the other side (B-C not swapped)";
+      if (mode == Mode::Forced) EXPECT_EQ(t.flipped, 0u) << tag << ": without a re-sort no pair changes rows";
       EXPECT_EQ(first_difference(ref, t), -1) << tag;
       report(("history: first step differing from no-rebuild run, " + tag).c_str(), first_difference(ref, t), -1, 0,
              "==");

@@ -53,8 +53,8 @@ void check(bool periodic, bool resort) {
   for (size_t i = 0; i < p.size(); ++i)
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
       const uint32_t j = nl.jdx[k];
-      EXPECT_LT(p.id[i], p.id[j]) << "pair not oriented lower id first";
-      const auto key = std::make_pair(p.id[i], p.id[j]);
+      EXPECT_LT(i, size_t(j)) << "pair not in the row of its lower index";
+      const std::pair<uint64_t, uint64_t> key = std::minmax(p.id[i], p.id[j]);
       EXPECT_TRUE(seen.insert(key).second) << "pair listed twice";
       auto it = ref.find(key);
       ASSERT_NE(it, ref.end()) << "listed pair beyond the cutoff";
@@ -140,7 +140,7 @@ TEST(NeighborList, RebuildCriterionNeverMissesAContact) {
     const double skin = b.skin;
     std::set<std::pair<uint64_t, uint64_t>> listed;
     for (size_t i = 0; i < b.p.size(); ++i)
-      for (uint32_t k = b.nl.start[i]; k < b.nl.start[i + 1]; ++k) listed.insert({b.p.id[i], b.p.id[b.nl.jdx[k]]});
+      for (uint32_t k = b.nl.start[i]; k < b.nl.start[i + 1]; ++k) listed.insert(std::minmax(b.p.id[i], b.p.id[b.nl.jdx[k]]));
     std::map<uint64_t, size_t> index_of;
     for (size_t i = 0; i < b.p.size(); ++i) index_of[b.p.id[i]] = i;
     // The closest unlisted pair.

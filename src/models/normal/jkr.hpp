@@ -30,6 +30,7 @@ struct JkrNormal : NormalBase {
   struct Params { double Estar, w; };
   static constexpr bool kHertzianStiffness = true;  // kn = 2 E* a, E* of the material pair
   struct State { bool formed = false; };
+  static void flip(State&) {}  ///< the same seen from either particle
   static constexpr std::array specs = {kWorkOfAdhesion};
   static Params make(const ParamSet& p, const PairMaterial& m) { return {m.Estar, p.get(specs[0])}; }
 

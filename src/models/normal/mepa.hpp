@@ -95,6 +95,7 @@ struct HystereticNormal : NormalBase {
     double Dp = 0;         ///< plastic overlap to the power n, Dmax (1 - k1/k2(Dmax))
     int32_t branch = 0;    ///< branch of the last evaluation: 1 loading, 2 un/reloading, 3 adhesive
   };
+  static void flip(State&) {}  ///< overlaps and branch: the same seen from either particle
   static constexpr std::array<const char*, 3> state_columns = {"dmax", "dp", "branch"};
   static void state_values(const Params& p, const State& s, double* out) {
     out[0] = std::pow(s.Dmax, 1.0 / p.n);

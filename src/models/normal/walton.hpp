@@ -37,6 +37,7 @@ struct WaltonNormal : NormalBase {
     double ap = 0;    ///< plastic overlap where the repulsion vanishes, m
     double fc = 0;    ///< current pull-off force Fc0 + cf F_Rmax, N
   };
+  static void flip(State&) {}  ///< overlaps and pull-off force: the same seen from either particle
   static constexpr std::array specs = {
       kWaltonY, kWaltonSf,
       req("Fc0", "N", 0, kInf, "pull-off force of a fresh contact"),

@@ -34,6 +34,8 @@ struct NoRolling {
 struct EpsdRolling {
   struct Params { double mu_r, eta_r; };
   struct State { Vec3 mk; };
+  /// The other side's history: the spring moment acts on i, so it changes sign.
+  static void flip(State& s) { s.mk = -s.mk; }
   static constexpr std::array specs = {
       req("mu_r", "-", 0, kInf, "rolling friction coefficient"),
       opt("eta_r", "-", 0.0, 0, kInf, "rolling viscous damping ratio (Ai et al. 2011 Eq. 17)")};

@@ -25,6 +25,11 @@ struct TangentialCommon {
   /// History of a spring whose stiffness never changes within a contact (step 2 is void):
   /// 24 bytes, not 32, per list entry.
   struct FixedState { Vec3 fs; };
+  /// The history as seen from the other particle (the pair's two sides exchanged, as when a
+  /// re-sort reverses which of them holds the pair's row): the spring force is the one on i,
+  /// so it changes sign; the stiffness does not.
+  static void flip(State& s) { s.fs = -s.fs; }
+  static void flip(FixedState& s) { s.fs = -s.fs; }
   /// Shared history update; returns the tangential force on i.
   template <class S>
   COHDEM_INLINE static Vec3 update(S& s, const PairGeom& g, double kt, double gamma_t, double mu, double fc) {

@@ -25,6 +25,8 @@ namespace cohdem {
 struct WaltonBending {
   struct Params { double Y, sf, bf, c_theta; };
   struct State { Vec3 m; };
+  /// The other side's history: the bending moment acts on i, so it changes sign.
+  static void flip(State& s) { s.m = -s.m; }
   static constexpr std::array specs = {kWaltonY, kWaltonSf, kWaltonBf, kWaltonCtheta};
   static Params make(const ParamSet& p, const PairMaterial&) {
     return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2]), p.get(specs[3])};
@@ -46,6 +48,9 @@ struct WaltonBending {
 struct WaltonTwisting {
   struct Params { double Y, sf, bf, c_theta, tf; };
   struct State { double m = 0; };
+  /// The other side's history: the twist about n, (w_i - w_j) . n, is the same seen from j
+  /// (both factors change sign), and so is the moment about n.
+  static void flip(State&) {}
   static constexpr std::array specs = {
       kWaltonY, kWaltonSf, kWaltonBf, kWaltonCtheta,
       opt("tf", "-", 1.0, 0, 2, "twist factor: T_max = tf B_max (0 <= tf <= 2), K_phi = K_theta")};
