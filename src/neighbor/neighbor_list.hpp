@@ -190,7 +190,7 @@ class NeighborList {
   std::vector<std::vector<uint8_t>> tl_img_;
   // The previous lists during a build (swapped, not copied) and the ids of their rows.
   std::vector<uint64_t> ids_, old_ids_;
-  std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, old_of_id_;
+  std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, new_of_id_;
   std::vector<uint16_t> old_wall_;
   std::vector<std::byte> old_hist_, old_whist_;
   std::vector<uint8_t> old_live_, old_wlive_;

@@ -7,6 +7,8 @@
 
 #include <omp.h>
 
+#include "core/grow.hpp"
+
 #include "neighbor/neighbor_list.hpp"
 #include "particles/particle_store.hpp"
 #include "walls/wall.hpp"
@@ -150,6 +152,13 @@ struct PairSlots {
     }
   }
   /// Modelled work of block t of the current split.
+  /// Grows the result buffer to the slots in use (with headroom: set-up, out of line).
+  [[gnu::noinline]] void fit(std::vector<PairResult>& pair) const {
+    if (pair.size() < count) {
+      reserve_headroom(pair, count);
+      pair.resize(count);
+    }
+  }
   uint64_t block_work(long t) const { return prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])]; }
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
   void measured(long t, double seconds) {
@@ -201,11 +210,14 @@ struct PairSlots {
   /// lies within `span` rows of a boundary between blocks (its partner's rows reach across
   /// it), so only those rows are mapped; elsewhere `of` is never read. After a new list the
   /// whole map is cleared first.
-  void update(const NeighborList& nl, long n_, long nt) {
+  /// Out of line: a set-up call of the force loop (tests/cli/kernel_inlined.sh allows calls
+  /// into PairSlots), not inlined into it.
+  [[gnu::noinline]] void update(const NeighborList& nl, long n_, long nt) {
     plan(nl, n_, nt);
     if (mapped) return;
     mapped = true;
     if (map_all) {
+      reserve_headroom(of, np);
       of.assign(np, kNone);
       map_all = false;
     }

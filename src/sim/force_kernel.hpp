@@ -147,7 +147,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       c.slots->plan(nl, n, nt);  // the blocks only: every result is stored by list entry
     } else {
       c.slots->update(nl, n, nt);
-      if (c.pair.size() < c.slots->count) c.pair.resize(c.slots->count);
+      c.slots->fit(c.pair);
       res = c.pair.data();
       slot_of = c.slots->of.data();
     }
