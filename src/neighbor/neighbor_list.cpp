@@ -86,7 +86,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     cell_of_.resize(n);
     reserve_headroom(cell_start_, ncell + 1);
     cell_start_.assign(ncell + 1, 0);
-    for (size_t i = 0; i < n; ++i) { cell_of_[i] = uint32_t(cell_index(p.x[i])); ++cell_start_[cell_of_[i] + 1]; }
+#pragma omp parallel for schedule(static) if (long(n) > parallel_min)
+    for (size_t i = 0; i < n; ++i) cell_of_[i] = uint32_t(cell_index(p.x[i]));
+    for (size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
     for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
     cell_list_.resize(n);
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
@@ -117,8 +119,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   // 4. Pairs, straight into CSR rows: particle i scans its 27 neighbouring cells and keeps the
   //    partners with a higher index (so each pair is found once, in the row of its lower
   //    index). Row order: cells in scan order, then cell order.
-  //    Parallel: each thread fills its own buffers for a contiguous block of rows; the
-  //    blocks are then concatenated in order, so the lists do not depend on the threads.
+  //    Parallel: the rows are cut into chunks of equal count, several per thread, taken by
+  //    the threads as they come free (rows differ in cost: a chute's dense flow against its
+  //    frozen base, a bed's floor against its free surface); each chunk fills buffers of its
+  //    own, concatenated in chunk order, so the lists do not depend on the threads.
   start.resize(n + 1);
   start[0] = 0;
   const uint64_t* const id = p.id.data();
@@ -126,20 +130,19 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   const Vec3* const x = p.x.data();
   const double* const rad = p.radius.data();
   const int nthreads = long(n) > parallel_min ? omp_get_max_threads() : 1;
-  if (int(tl_jdx_.size()) < nthreads) { tl_jdx_.resize(nthreads); tl_img_.resize(nthreads); }
-  int team = 1;
-#pragma omp parallel num_threads(nthreads)
-  {
-  const int nt = omp_get_num_threads(), tid = omp_get_thread_num();
-  const size_t a0 = n * tid / nt, a1 = n * (tid + 1) / nt;
-  // The thread's buffers are filled through vector objects of its own (swapped in and out,
-  // keeping their capacity): the tl_ vectors' headers share cache lines, and every
+  const int chunks = nthreads == 1 ? 1 : int(std::min<size_t>(size_t(8 * nthreads), std::max<size_t>(n / 256, 1)));
+  if (int(tl_jdx_.size()) < chunks) { tl_jdx_.resize(chunks); tl_img_.resize(chunks); }
+#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1)
+  for (int ch = 0; ch < chunks; ++ch) {
+  const size_t a0 = n * size_t(ch) / size_t(chunks), a1 = n * size_t(ch + 1) / size_t(chunks);
+  // The chunk's buffers are filled through vector objects of the thread's own (swapped in
+  // and out, keeping their capacity): the tl_ vectors' headers share cache lines, and every
   // push_back through them bounced those lines between the cores (two threads took three
   // times one thread's time over the pair search of the chute).
   std::vector<uint32_t> jdx;
   std::vector<uint8_t> image;
-  jdx.swap(tl_jdx_[tid]);
-  image.swap(tl_img_[tid]);
+  jdx.swap(tl_jdx_[ch]);
+  image.swap(tl_img_[ch]);
   jdx.clear();
   image.clear();
   for (size_t a = a0; a < a1; ++a) {
@@ -197,15 +200,14 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         }
       }
     }
-    start[a + 1] = uint32_t(jdx.size());  // end of the row within this thread's buffer
+    start[a + 1] = uint32_t(jdx.size());  // end of the row within this chunk's buffer
   }
-  jdx.swap(tl_jdx_[tid]);
-  image.swap(tl_img_[tid]);
-  if (tid == 0) team = nt;
+  jdx.swap(tl_jdx_[ch]);
+  image.swap(tl_img_[ch]);
   }
   size_t np = 0;
-  for (int t = 0; t < team; ++t) {
-    const size_t a0 = n * t / team, a1 = n * (t + 1) / team;
+  for (int t = 0; t < chunks; ++t) {
+    const size_t a0 = n * size_t(t) / size_t(chunks), a1 = n * size_t(t + 1) / size_t(chunks);
     for (size_t a = a0; a < a1; ++a) start[a + 1] += uint32_t(np);
     np += tl_jdx_[t].size();
   }
@@ -213,9 +215,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   reserve_headroom(image, np);
   jdx.resize(np);
   image.resize(np);
-#pragma omp parallel for num_threads(team) schedule(static, 1)
-  for (int t = 0; t < team; ++t) {
-    const size_t off = start[n * t / team];
+#pragma omp parallel for num_threads(nthreads) schedule(static, 1)
+  for (int t = 0; t < chunks; ++t) {
+    const size_t off = start[n * size_t(t) / size_t(chunks)];
     std::copy(tl_jdx_[t].begin(), tl_jdx_[t].end(), jdx.begin() + off);
     std::copy(tl_img_[t].begin(), tl_img_[t].end(), image.begin() + off);
   }
@@ -276,10 +278,22 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   reserve_headroom(hist.live, np);
   reserve_headroom(whist.data, wall.size() * whist.stride);
   reserve_headroom(whist.live, wall.size());
-  hist.data.assign(np * hist.stride, std::byte{0});
-  hist.live.assign(np, 0);
+  hist.data.resize(np * hist.stride);
+  hist.live.resize(np);
   whist.data.assign(wall.size() * whist.stride, std::byte{0});
   whist.live.assign(wall.size(), 0);
+  {  // zeroed by the threads, a block each (megabytes on a large bed)
+    std::byte* const hd = hist.data.data();
+    uint8_t* const hl = hist.live.data();
+    const size_t st = hist.stride;
+#pragma omp parallel if (long(n) > parallel_min)
+    {
+      const size_t nt = size_t(omp_get_num_threads()), t = size_t(omp_get_thread_num());
+      const size_t k0 = np * t / nt, k1 = np * (t + 1) / nt;
+      std::memset(hd + k0 * st, 0, (k1 - k0) * st);
+      std::memset(hl + k0, 0, k1 - k0);
+    }
+  }
   uint64_t old_live = 0;
   for (uint8_t l : old_live_) old_live += l;
   uint64_t old_wlive = 0;
