@@ -13,7 +13,14 @@ number of steps at every size, so the physics per particle is the same and any c
 cost per particle-step comes from the code (cache, lists, threads). Runs are interleaved
 over sizes and thread counts; the table shows the best run and the median. --chute adds
 LAMMPS's chute benchmark (32,000 spheres in dense flow, bench/chute.toml), a problem with
-4x as many contacts per particle as the gas. Python 3 stdlib only.
+4x as many contacts per particle as the gas.
+
+--ceiling also measures what the machine gives two runs at once: in each repeat and for
+each problem, two independent one-thread runs started together (no shared data, no
+synchronisation), their summed rate over the one-thread run of the same repeat. That is the
+most any two-thread code can reach here; the table's last column sets the two-thread
+speed-up against it (on a virtual machine whose second core is shared with other work, two
+processes can give well under 2x). Python 3 stdlib only.
 """
 import argparse
 import json
@@ -35,6 +42,8 @@ def main():
     ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "scaling"))
     ap.add_argument("--chute", action="store_true", help="add LAMMPS's chute benchmark (32,000 spheres)")
+    ap.add_argument("--ceiling", action="store_true",
+                    help="also run two independent one-thread runs at once: what two cores give here")
     ap.add_argument("--chute-data", default=os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute"))
     a = ap.parse_args()
     sizes = [int(float(x)) for x in a.sizes.split(",")]
@@ -56,14 +65,16 @@ def main():
         subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), a.chute_data,
                         os.path.join(HERE, "chute.toml"), "-o", case], check=True)
         probs.append(("chute", "32,000 (chute)", case))
-    best, allr = {}, {}
+    def cmd(case, t, out):
+        return [a.cohdem, "run", case, "--set", f"simulation.duration={a.steps * 1e-4!r}", "--threads", str(t),
+                "--out", out, "--quiet"]
+
+    best, allr, pair = {}, {}, {}
     for r in range(a.repeat):
         for key, label, case in probs:
             for t in threads:
                 out = os.path.join(a.out, f"run_{key}_{t}")
-                subprocess.run([a.cohdem, "run", case, "--set",
-                                f"simulation.duration={a.steps * 1e-4!r}", "--threads", str(t), "--out", out, "--quiet"],
-                               check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                subprocess.run(cmd(case, t, out), check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                 j = json.load(open(os.path.join(out, "summary.json")))
                 rate = j["particle_steps_per_s"]
                 print(f"  run {r + 1}: {label:>16s}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
@@ -71,10 +82,23 @@ def main():
                 allr.setdefault(k, []).append(rate)
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
+            if a.ceiling:
+                outs = [os.path.join(a.out, f"run_{key}_pair{q}") for q in (0, 1)]
+                procs = [subprocess.Popen(cmd(case, 1, o), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                         for o in outs]
+                if any(p.wait() != 0 for p in procs):
+                    sys.exit(f"a two-process run of {label} failed")
+                rates = [json.load(open(os.path.join(o, "summary.json")))["particle_steps_per_s"] for o in outs]
+                solo = allr[(key, 1)][-1] if (key, 1) in allr else float("nan")
+                pair.setdefault(key, []).append(sum(rates) / solo)
+                print(f"  run {r + 1}: {label:>16s}, two 1-thread runs at once: {rates[0]:10.4g} + {rates[1]:10.4g}"
+                      f" = {sum(rates) / solo:.2f}x this repeat's one-thread run", flush=True)
     print(f"\n{a.steps} steps, best and median of {a.repeat} runs")
+    ceil = a.ceiling and 1 in threads and 2 in threads
     print(f"| particles | threads | particle-steps/s (best) | median | ns per particle-step (best) | "
-          f"{threads[-1]} threads / {threads[0]} (best, median) | contacts per particle | peak RSS of the run | bytes per particle |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          f"{threads[-1]} threads / {threads[0]} (best, median) | contacts per particle | peak RSS of the run | bytes per particle |"
+          + (" two runs at once / one (median) | 2 threads / two runs (median) |" if ceil else ""))
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if ceil else ""))
     rows = []
     for key, label, _ in probs:
         for t in threads:
@@ -86,11 +110,19 @@ def main():
             if t != threads[0] and (key, threads[0]) in best:
                 sp = (f"{rate / best[(key, threads[0])]['particle_steps_per_s']:.2f}, "
                       f"{med / statistics.median(allr[(key, threads[0])]):.2f}")
+            extra = ""
+            if ceil:
+                extra = " | |"
+                if t == 2 and key in pair:
+                    c = statistics.median(pair[key])
+                    s2 = med / statistics.median(allr[(key, 1)])
+                    extra = f" {c:.2f} | {s2 / c:.2f} |"
             print(f"| {label} | {t} | {rate:.3g} | {med:.3g} | {1e9 / rate:.0f} | {sp} | {j['contacts'] / n:.2f} | "
-                  f"{j['peak_rss_run_bytes'] / 2**20:.0f} MiB | {j['run_bytes_per_particle']:.0f} |")
+                  f"{j['peak_rss_run_bytes'] / 2**20:.0f} MiB | {j['run_bytes_per_particle']:.0f} |" + extra)
             rows.append({"problem": label, "particles": n, "threads": t, "particle_steps_per_s": rate,
                          "median_particle_steps_per_s": med, "contacts": j["contacts"],
-                         "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"]})
+                         "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"],
+                         "two_runs_over_one": pair.get(key) if t == 2 else None})
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):

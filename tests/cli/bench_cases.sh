@@ -2,8 +2,9 @@
 # The benchmark inputs stay valid as the code changes (issue 6: "keep the benchmark script
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
-# steps, model_cost.py prints its four rows, instructions.py counts a small packing and
-# contact_instructions.py the force loop's instructions per contact of two laws.
+# steps, model_cost.py prints its four rows, instructions.py counts a small packing,
+# contact_instructions.py the force loop's instructions per contact of two laws and
+# scaling.py gives its table for a small gas (with --ceiling).
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
 set -u
@@ -74,5 +75,17 @@ sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   contact_instruction
 else
   echo "skip contact_instructions.py ($bench_bin not built: COHDEM_BUILD_BENCH=OFF)"
 fi
+# scaling.py end to end (a 1000-sphere gas, 3 steps, 1 and 2 threads, and --ceiling's two
+# one-thread runs at once): a row per thread count, positive rates and bytes per particle,
+# and the two runs' summed rate recorded against the one-thread run.
+if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat 1 --ceiling --cohdem "$bin" \
+     --out "$work/sc" > "$work/sc.log" 2>&1 &&
+   python3 -c "
+import json, math, sys
+rows = json.load(open('$work/sc/scaling.json'))['rows']
+ok = [r['threads'] for r in rows] == [1, 2] and all(r['particle_steps_per_s'] > 0 and r['peak_rss_run_bytes'] > 0 for r in rows)
+c = rows[1]['two_runs_over_one']
+ok = ok and c is not None and len(c) == 1 and math.isfinite(c[0]) and c[0] > 0
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
