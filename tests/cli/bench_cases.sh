@@ -84,7 +84,7 @@ if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat
 import json, math, sys
 rows = json.load(open('$work/sc/scaling.json'))['rows']
 ok = [r['threads'] for r in rows] == [1, 2] and all(r['particle_steps_per_s'] > 0 and r['peak_rss_run_bytes'] > 0 for r in rows)
-c = rows[1]['two_runs_over_one']
+c = rows[1]['two_runs_at_once']
 ok = ok and c is not None and len(c) == 1 and math.isfinite(c[0]) and c[0] > 0
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
