@@ -55,7 +55,6 @@ class ContactModelImpl final : public ContactModel {
     std::memcpy(state, &s, sizeof(State));
     return alive;
   }
-  void flip_state(void* state) const override { flip_history(state); }
   FlipFn flipper() const override { return &flip_history; }
   static void flip_history(void* state) {
     State s;

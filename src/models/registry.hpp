@@ -33,12 +33,12 @@ class ContactModel {
   /// One contact, for the single-contact driver and tests; `state` points to state_size()
   /// bytes (zeroed for a new contact). Returns false when there is no contact.
   virtual bool evaluate(int i, int j, const PairGeom& g, void* state, PairForce& out) const = 0;
-  /// Rewrites one contact's history (state_size() bytes) as seen from the other particle:
-  /// the history of pair (j, i) from that of (i, j).
-  virtual void flip_state(void* state) const = 0;
-  /// The same as a plain function (for the neighbor list, which knows no models).
+  /// The function that rewrites one contact's history (state_size() bytes) as seen from the
+  /// other particle, the history of pair (j, i) from that of (i, j): a plain function, for
+  /// the neighbor list, which knows no models.
   using FlipFn = void (*)(void* state);
   virtual FlipFn flipper() const = 0;
+  void flip_state(void* state) const { flipper()(state); }
   /// Names of the per-contact state columns the law exposes (e.g. MEPA: dmax, dp, branch).
   virtual std::vector<std::string> state_names() const = 0;
   /// Values of those columns for one contact of pair (i, j); `out` has state_names().size().

@@ -102,8 +102,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   // Particles in cell order (just re-sorted, or still so): every particle of a cell before
   // a's has a lower index than a, and the binning is the identity (cell_list_[q] == q), so
   // the pair search skips them whole (it keeps partners of higher index only).
-  bool sorted = true;
-  for (size_t i = 1; i < n && sorted; ++i) sorted = cell_of_[i - 1] <= cell_of_[i];
+  bool in_cell_order = true;
+  for (size_t i = 1; i < n && in_cell_order; ++i) in_cell_order = cell_of_[i - 1] <= cell_of_[i];
   one_species = n > 0 ? p.species[0] : -1;
   for (size_t i = 1; i < n && one_species >= 0; ++i)
     if (p.species[i] != one_species) one_species = -1;
@@ -155,7 +155,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     // hold particles of index up to a: only those after a are candidates (the cells before
     // a's are skipped whole: about half of the 27).
     auto scan = [&](uint32_t q0, uint32_t q1, uint8_t img) {
-      if (sorted) q0 = std::max(q0, uint32_t(a + 1));
+      if (in_cell_order) q0 = std::max(q0, uint32_t(a + 1));
       const Vec3 sh = shift[img];
       for (uint32_t q = q0; q < q1; ++q) {
         const uint32_t b = cell_list_[q];

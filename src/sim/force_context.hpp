@@ -8,7 +8,6 @@
 #include <omp.h>
 
 #include "core/grow.hpp"
-
 #include "neighbor/neighbor_list.hpp"
 #include "particles/particle_store.hpp"
 #include "walls/wall.hpp"
@@ -151,7 +150,6 @@ struct PairSlots {
       bound[size_t(t)] = std::min(n, long(it - prefix.begin()));
     }
   }
-  /// Modelled work of block t of the current split.
   /// Grows the result buffer to the slots in use (with headroom: set-up, out of line).
   [[gnu::noinline]] void fit(std::vector<PairResult>& pair) const {
     if (pair.size() < count) {
@@ -159,6 +157,7 @@ struct PairSlots {
       pair.resize(count);
     }
   }
+  /// Modelled work of block t of the current split.
   uint64_t block_work(long t) const { return prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])]; }
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
   void measured(long t, double seconds) {
