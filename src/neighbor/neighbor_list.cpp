@@ -229,15 +229,13 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   reserve_headroom(rpair, np);
   rpair.resize(np);
   dep_lo.resize(n);
-  dep_hi.resize(n);
   fill_.assign(rstart.begin(), rstart.end() - 1);
-  for (size_t i = 0; i < n; ++i) dep_lo[i] = dep_hi[i] = uint32_t(i);
+  for (size_t i = 0; i < n; ++i) dep_lo[i] = uint32_t(i);
   for (size_t i = 0; i < n; ++i)
     for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
       const uint32_t j = jdx[k];
       rpair[fill_[j]++] = k;
-      dep_lo[j] = std::min(dep_lo[j], uint32_t(i));
-      dep_hi[j] = std::max(dep_hi[j], uint32_t(i));
+      dep_lo[j] = std::min(dep_lo[j], uint32_t(i));  // rows ascend, and i < j
     }
 
   // 5. Wall candidates. Bounded walls are tested with their bounds widened by the largest

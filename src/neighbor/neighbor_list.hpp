@@ -99,10 +99,10 @@ class NeighborList {
   std::vector<uint8_t> image;    ///< image code of j
   std::vector<uint32_t> rstart;  ///< transposed: n+1 offsets
   std::vector<uint32_t> rpair;   ///< pair indices where the particle is j
-  /// Lowest and highest row (i) holding a pair of the particle, itself included: the force
-  /// kernel finishes a particle once rows dep_lo..dep_hi are done. With pairs in the row of
-  /// their lower index, dep_hi of a particle is its own row.
-  std::vector<uint32_t> dep_lo, dep_hi;
+  /// Lowest row (i) holding a pair of the particle, itself included. With each pair in the
+  /// row of its lower index, the particle's own row is the highest: the force kernel
+  /// finishes a particle once rows dep_lo..itself are done.
+  std::vector<uint32_t> dep_lo;
   HistoryArray hist;
 
   // Wall candidates (CSR by particle).

@@ -38,10 +38,11 @@ struct PairResult {
 /// splits by work): thread t sweeps [n t/nt, n (t+1)/nt).
 COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
 /// Particle q is "local" to the block [a, b) when every row that holds a pair of q lies in
-/// it (dep_lo/dep_hi from the list build): that block's thread alone scatters into q's
-/// reverse sums; the pairs of the other particles are stored and gathered.
-COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, const uint32_t* dep_hi, uint32_t q, long a, long b) {
-  return long(dep_lo[q]) >= a && long(dep_hi[q]) < b;
+/// it: rows dep_lo[q] (from the list build) to q's own, the last (each pair lies in the row
+/// of its lower index). That block's thread alone scatters into q's reverse sums; the pairs
+/// of the other particles are stored and gathered.
+COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, long b) {
+  return long(dep_lo[q]) >= a && long(q) < b;
 }
 
 /// How the force loop on several threads splits the particles, and where it keeps the results
@@ -94,7 +95,7 @@ struct PairSlots {
   bool stale = false;      ///< the shares changed: plan() splits again at its next call
   uint64_t rebalances = 0; ///< splits moved by measurement (for tests and diagnostics)
   /// Per list build: the modelled work of particles [0, i) (n + 1 entries), and the widest
-  /// dependency range, max(dep_hi - dep_lo), which bounds how far from a block boundary a
+  /// dependency range, max(i - dep_lo[i]), which bounds how far from a block boundary a
   /// row can hold a pair that is not local (update()).
   std::vector<uint64_t> prefix;
   long span = 0;
@@ -131,7 +132,7 @@ struct PairSlots {
       span = 0;
       for (long i = 0; i < n; ++i) {
         prefix[size_t(i + 1)] = prefix[size_t(i)] + work_of(nl, i);
-        span = std::max(span, long(nl.dep_hi[size_t(i)]) - long(nl.dep_lo[size_t(i)]));
+        span = std::max(span, i - long(nl.dep_lo[size_t(i)]));
       }
       map_all = true;
     }
@@ -231,7 +232,7 @@ struct PairSlots {
         while (bound[size_t(u + 1)] <= i) ++u;
         const long a = bound[size_t(u)], b = bound[size_t(u + 1)];
         for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-          of[k] = local_to_block(nl.dep_lo.data(), nl.dep_hi.data(), nl.jdx[k], a, b) ? kNone : count++;
+          of[k] = local_to_block(nl.dep_lo.data(), nl.jdx[k], a, b) ? kNone : count++;
       }
       from = std::max(from, hi);
     }

@@ -124,19 +124,19 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
-  // Rows that hold a pair of particle p: dep_lo[p]..dep_hi[p] (p's own row included). A
+  // Rows that hold a pair of particle p: dep_lo[p]..p (each pair lies in the row of its lower
+  // index, so p's own row is the last). A
   // particle whose rows all lie in the block [a, b) of one thread is "local" to it: that
   // thread alone scatters into its reverse sums (in ascending list order, rows being swept
   // in order), with no per-pair store and no gather. The others (near a block boundary)
   // have their pairs' results stored and gathered through the transposed index. One thread:
   // every particle is local (kAllLocal skips the test).
   const uint32_t* const __restrict dep_lo = nl.dep_lo.data();
-  const uint32_t* const __restrict dep_hi = nl.dep_hi.data();
 
   // Each thread takes a contiguous block [a, b) of particles and runs pass 1 over it; pass 2
-  // of particle p follows as soon as every row it depends on is done (dep_hi[p] <= current
-  // row) while those rows lie in the block, so pair results are read back while they are
-  // still in cache. Particles that depend on rows of other blocks wait for the barrier.
+  // of particle p follows as soon as its own row is done (the last that holds a pair of p)
+  // when all of p's rows lie in the block, so pair results are read back while they are
+  // still in cache. Particles that depend on rows of an earlier block wait for the barrier.
   // Only the time at which pass 2 runs depends on the thread count, never the order of sums.
   // Several threads with a PairSlots (a System always brings one): the post-barrier work is
   // shared out (below), and without recording the gathered pairs are stored compactly. The
@@ -164,7 +164,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   bool timed = false;  // the region's threads timed their sweeps
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
-                                                  keep_pair, kick_h, open_dt, dep_lo, dep_hi, params, nmat, entries, simd, \
+                                                  keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd, \
                                                   lane_p)
   {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
@@ -174,7 +174,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       setup_slots(nt);  // implicit barrier: every thread sees the blocks, res, slot_of and the lists
     }
     auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
-      return local_to_block(dep_lo, dep_hi, q, a, b);
+      return local_to_block(dep_lo, q, a, b);
     };
 
     // Pass 1 of the list entries [kb, ke) (at most kBatch), which belong to the rows [i0, i1]
@@ -355,13 +355,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     };
     const long a = block(tid), b = block(tid + 1);
     Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
-    // next: the first particle of the block not yet finished or skipped. A particle that
-    // depends on a later block (dep_hi >= b) stops the in-loop finishing for the rest of the
-    // block; those, and the ones depending on earlier blocks, are finished after the barrier.
-    // One thread (a = 0, b = n) takes the same path with every particle local (kAllLocal:
-    // no locality tests; nothing is left for after the barrier). Several: the particles met
-    // on the way that depend on an earlier block are handed to `defer` (ascending), so that
-    // no second pass over the block has to look for them.
+    // next: the first particle of the block not yet finished or deferred. No particle depends
+    // on a later row than its own, so every particle of the block is finished or deferred by
+    // the end of the sweep. One thread (a = 0, b = n) takes the same path with every particle
+    // local (kAllLocal: no locality tests; nothing is left for after the barrier). Several:
+    // the particles met on the way that depend on an earlier block are handed to `defer`
+    // (ascending), so that no second pass over the block has to look for them.
     auto sweep = [&]<bool kAllLocal>(auto&& defer) __attribute__((always_inline)) {
       // Batches of kBatch entries (the last of the block shorter); i: the first row not yet
       // done, k: its first entry not yet screened. Rows done, [.., i), may be finished.
@@ -373,7 +372,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
         i = i1;
         k = ke;
-        for (; next < i && long(dep_hi[next]) < i; ++next) {
+        for (; next < i; ++next) {
           // Every row of `next` is done and below b: local when none lies before a.
           if (kAllLocal || long(dep_lo[next]) >= a)
             finish.template operator()<true>(next, a, b, drift);
@@ -381,12 +380,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
             defer(next);
         }
       }
-      return next;
     };
     // The particles left for after the barrier are not spread evenly: a block's first
     // particles depend on the rows of the block before (the plane of cells across the
     // boundary), the first block's on none. On several threads each lists its own (those the
-    // sweep deferred, then all from `next` on: ascending). With a PairSlots all of them are
+    // sweep deferred: ascending). With a PairSlots all of them are
     // shared out in equal parts after the barrier; finish() is told the block that owns the
     // particle (its locality test is the owner's), so what is summed, and in which order, is
     // the same whichever thread finishes it. Without one, each thread finishes its own.
@@ -399,11 +397,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     own.clear();
     auto none = [](const long) __attribute__((always_inline)) {};
     const double t_sweep = share ? omp_get_wtime() : 0.0;
-    const long next =
-        nt == 1 ? sweep.template operator()<true>(none)
-                : sweep.template operator()<false>(
-                      [&](const long q) __attribute__((always_inline)) { defer_range(own, q, q + 1); });
-    if (nt > 1) defer_range(own, next, b);
+    if (nt == 1)
+      sweep.template operator()<true>(none);
+    else
+      sweep.template operator()<false>([&](const long q) __attribute__((always_inline)) { defer_range(own, q, q + 1); });
     if (share) {
       own.swap(c.slots->deferred[size_t(tid)]);
       c.slots->measured(tid, omp_get_wtime() - t_sweep);
@@ -422,10 +419,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       }
     } else {
 #pragma omp barrier
-      if (nt == 1)
-        for (long q = next; q < b; ++q) finish.template operator()<true>(q, a, b, drift);
-      else
-        for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
+      for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
     }
     if (open_dt > 0) {
 #pragma omp critical(cohdem_fused_drift)
