@@ -1,8 +1,10 @@
 // Everything one force evaluation reads and writes.
 #pragma once
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <omp.h>
@@ -99,6 +101,66 @@ struct PairSlots {
   /// row can hold a pair that is not local (update()).
   std::vector<uint64_t> prefix;
   long span = 0;
+  /// Whether the split lets the force loop end without its barrier ("chained" finishing):
+  /// every block holds at least 2 `span` rows. A particle of block t that depends on an
+  /// earlier block (dep_lo below the block) then lies in block t's first `span` rows and
+  /// depends on block t - 1 and on no block before it, so thread t - 1 can finish it once its
+  /// own sweep is done and thread t has handed over its first `span` rows (HandOff). Set by
+  /// plan().
+  bool chained = false;
+  /// Per thread t > 0, in a chained force call: the particles of block t that depend on
+  /// block t - 1, published (release) once thread t has swept its first `span` rows, for
+  /// thread t - 1 to finish (acquire). `epoch` is the call's number, so no reset is needed
+  /// between calls (it wraps; only equality with the current call's number is asked). One
+  /// cache line each: the flag is spun on.
+  struct alignas(64) HandOff {
+    std::atomic<uint32_t> epoch{0};
+    const uint32_t* list = nullptr;
+    size_t count = 0;
+  };
+  std::unique_ptr<HandOff[]> hand;
+  size_t hand_n = 0;
+  uint32_t epoch = 0;  ///< force calls made through this PairSlots, the last one's number (wraps)
+  uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
+  /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
+  /// before the parallel region).
+  uint32_t next_epoch(long nt) {
+    if (hand_n < size_t(nt)) {
+      hand = std::make_unique<HandOff[]>(size_t(nt));
+      hand_n = size_t(nt);
+    }
+    return ++epoch;
+  }
+  /// Thread t's hand-off of its block's particles that depend on block t - 1 (the list is
+  /// complete: none is added to it after this call, so its buffer stays where it is). Out of
+  /// line: once per call and thread.
+  [[gnu::noinline]] void hand_over(long t, const std::vector<uint32_t>& list, uint32_t call) {
+    HandOff& H = hand[size_t(t)];
+    H.list = list.data();
+    H.count = list.size();
+    H.epoch.store(call, std::memory_order_release);
+    H.epoch.notify_all();  // a load, unless the thread that takes the list sleeps on it
+  }
+  /// Pauses spun on a hand-off before the waiting thread sleeps (some tens of microseconds).
+  static constexpr uint32_t kSpinsBeforeSleep = 2000;
+  /// Waits until thread t has handed over its list in call `call` (acquire). Spun on for a
+  /// short while (the hand-off normally came long before), then slept on (a futex, woken by
+  /// hand_over): with more threads than free cores the thread waited for may be the one that
+  /// needs this core (libgomp's barrier does the same when its spin count runs out).
+  [[gnu::noinline]] const HandOff& wait_for(long t, uint32_t call) const {
+    const HandOff& H = hand[size_t(t)];
+    for (uint32_t spins = 0;; ++spins) {
+      const uint32_t seen = H.epoch.load(std::memory_order_acquire);
+      if (seen == call) return H;
+      if (spins < kSpinsBeforeSleep) {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      } else {
+        H.epoch.wait(seen, std::memory_order_acquire);
+      }
+    }
+  }
 
   /// Work of particle i: kWorkParticle, one per list entry of its row, kWorkContact per live
   /// contact (the contacts carried over at the last build).
@@ -150,6 +212,8 @@ struct PairSlots {
                                        [](const uint64_t w, const double c) { return double(w) < c; });
       bound[size_t(t)] = std::min(n, long(it - prefix.begin()));
     }
+    chained = true;
+    for (long t = 0; t < nt; ++t) chained = chained && bound[size_t(t + 1)] - bound[size_t(t)] >= 2 * span;
   }
   /// Grows the result buffer to the slots in use (with headroom: set-up, out of line).
   [[gnu::noinline]] void fit(std::vector<PairResult>& pair) const {

@@ -18,9 +18,11 @@
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
 // (of about equal work: PairSlots::plan, corrected by the threads' measured sweep times,
 // PairSlots::rebalance) and pass 2 of each particle as soon as the rows it
-// depends on are done; particles that
-// depend on another block wait for the single barrier, after which they are shared out
-// evenly among the threads. The row sweep scatters j's share straight into j's reverse sums
+// depends on are done. Particles that depend on the block before (its last rows hold some
+// of their pairs) are finished by that block's thread after its sweep, handed over once
+// their own rows are done (PairSlots::HandOff: no barrier); where the blocks are too short
+// for that (PairSlots::chained), all threads meet at a barrier and share them out. The row
+// sweep scatters j's share straight into j's reverse sums
 // (in ascending list order) when all of j's pairs lie in the sweeping thread's block
 // (always, on one thread); pairs of particles near a block boundary store their results,
 // gathered through the transposed index in the same order. Only WHEN and on which thread
@@ -154,7 +156,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
   };
   const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
-  if (nt_plan > 1 && c.slots != nullptr) setup_slots(nt_plan);
+  // The call's number for the chained finishing's hand-offs (PairSlots::HandOff).
+  uint32_t epoch = 0;
+  if (nt_plan > 1 && c.slots != nullptr) {
+    setup_slots(nt_plan);
+    epoch = c.slots->next_epoch(nt_plan);
+  }
   // The arrays' pointers and the loop's constants are firstprivate, and the lambdas below are
   // defined inside the region: shared, each use went through the region's record of the
   // variable's address (two dependent loads, repeated after every store that might alias it);
@@ -171,7 +178,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     const bool share = nt > 1 && c.slots != nullptr;
     if (share && nt != nt_plan) {
 #pragma omp single
-      setup_slots(nt);  // implicit barrier: every thread sees the blocks, res, slot_of and the lists
+      {
+        setup_slots(nt);
+        epoch = c.slots->next_epoch(nt);
+      }  // implicit barrier: every thread sees the blocks, res, slot_of, the lists and epoch
     }
     auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
       return local_to_block(dep_lo, q, a, b);
@@ -361,7 +371,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // local (kAllLocal: no locality tests; nothing is left for after the barrier). Several:
     // the particles met on the way that depend on an earlier block are handed to `defer`
     // (ascending), so that no second pass over the block has to look for them.
-    auto sweep = [&]<bool kAllLocal>(auto&& defer) __attribute__((always_inline)) {
+    auto sweep = [&]<bool kAllLocal>(auto&& defer, auto&& swept_to) __attribute__((always_inline)) {
       // Batches of kBatch entries (the last of the block shorter); i: the first row not yet
       // done, k: its first entry not yet screened. Rows done, [.., i), may be finished.
       long next = a, i = a;
@@ -379,6 +389,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           else
             defer(next);
         }
+        swept_to(next);  // every particle before `next` is finished or deferred
       }
     };
     // The particles left for after the barrier are not spread evenly: a block's first
@@ -397,11 +408,43 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     own.clear();
     auto none = [](const long) __attribute__((always_inline)) {};
     const double t_sweep = share ? omp_get_wtime() : 0.0;
+    // Chained finishing (PairSlots::chained: every block at least 2 span rows): no barrier.
+    // The particles of block t that depend on block t - 1 lie in its first `span` rows; once
+    // thread t has swept them (next >= a + span), its list of them is complete and their own
+    // rows are done, and it hands the list to thread t - 1 (release), which finishes them
+    // after its own sweep (acquire): they need rows of blocks t - 1 and t only, up to their
+    // own. Otherwise all threads meet at the barrier and share the deferred particles out.
+    const bool chain = share && c.slots->chained;
+    long hand_at = chain && tid > 0 ? std::min(a + c.slots->span, b) : std::numeric_limits<long>::max();
+    auto hand_over = [&]() __attribute__((always_inline)) {
+      c.slots->hand_over(tid, own, epoch);  // no particle is deferred after this point
+      hand_at = std::numeric_limits<long>::max();
+    };
     if (nt == 1)
-      sweep.template operator()<true>(none);
+      sweep.template operator()<true>(none, none);
     else
-      sweep.template operator()<false>([&](const long q) __attribute__((always_inline)) { defer_range(own, q, q + 1); });
-    if (share) {
+      sweep.template operator()<false>(
+          [&](const long q) __attribute__((always_inline)) { defer_range(own, q, q + 1); },
+          [&](const long swept) __attribute__((always_inline)) {
+            if (swept >= hand_at) hand_over();
+          });
+    if (chain) {
+      if (hand_at != std::numeric_limits<long>::max()) hand_over();  // an empty block
+      own.swap(c.slots->deferred[size_t(tid)]);  // the buffer handed over stays where it is
+      double busy = omp_get_wtime() - t_sweep;
+      if (tid + 1 < nt) {
+        const PairSlots::HandOff& H = c.slots->wait_for(tid + 1, epoch);
+        const double t0 = omp_get_wtime();
+        const long ta = block(tid + 1), tb = block(tid + 2);
+        for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, drift);
+        busy += omp_get_wtime() - t0;  // the waiting is not this block's work
+      }
+      c.slots->measured(tid, busy);
+      if (tid == 0) {
+        timed = true;
+        ++c.slots->chained_calls;
+      }
+    } else if (share) {
       own.swap(c.slots->deferred[size_t(tid)]);
       c.slots->measured(tid, omp_get_wtime() - t_sweep);
       if (tid == 0) timed = true;

@@ -141,6 +141,9 @@ class System {
   const std::vector<Vec3>& wall_forces() const { return f_wall_; }
   const std::vector<Vec3>& wall_contact_points() const { return c_wall_; }
   const std::vector<double>& wall_contact_radii() const { return a_wall_; }
+  /// The force loop's split over threads (diagnostics and tests: its blocks, the calls that
+  /// ended without the barrier).
+  const PairSlots& thread_split() const { return slots_; }
 
  private:
   /// Forces at the current state; kick_h > 0: each free particle's velocities also get the

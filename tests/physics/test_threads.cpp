@@ -24,13 +24,14 @@ struct State {
   uint64_t builds = 0;
   size_t contacts = 0;
   int threads = 0;
+  uint64_t chained_calls = 0;  ///< force calls that ended without the barrier
 };
 
 // 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run:
-// of glass alone, or of species `sp` among the materials `mats`, with walls of material `wm`.
+// of glass alone, or of species `sp` among the materials `mats`, with walls of material `wm`;
+// L x L wide, filled to height H.
 std::unique_ptr<System> make_box(int threads, bool record, std::vector<Material> mats = {{"glass", 2500, 5e7, 0.25}},
-                                 int sp = 0, int wm = 0) {
-  const double L = 0.04;
+                                 int sp = 0, int wm = 0, double L = 0.04, double H = 0.018) {
   auto s = make_system(std::move(mats), "hertz_mindlin", "epsd",
                        params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"eta_r", 0.3}}), 5e-6, {0, 0, -9.81}, 2e-4);
   s->cfg.threads = threads;
@@ -45,7 +46,7 @@ std::unique_ptr<System> make_box(int threads, bool record, std::vector<Material>
   InsertSpec spec;
   spec.region.kind = Region::Kind::Box;
   spec.region.lo = {0, 0, 0};
-  spec.region.hi = {L, L, 0.018};  // solids fraction ~0.23: frequent multi-contact collisions
+  spec.region.hi = {L, L, H};  // solids fraction ~0.23 (L, H as given): frequent multi-contact collisions
   spec.size.kind = SizeDistribution::Kind::Uniform;
   spec.size.rmin = 1.5e-3;
   spec.size.rmax = 2.0e-3;
@@ -72,12 +73,16 @@ State state_of(const System& s) {
   return st;
 }
 
-State run(int threads, bool record = false) {
-  auto s = make_box(threads, record);
+// 400 steps of make_box's box, or of a column of the same solids fraction (column: its force
+// loop on several threads ends without the barrier, PairSlots::chained).
+State run(int threads, bool record = false, bool column = false) {
+  auto s = column ? make_box(threads, record, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125)
+                  : make_box(threads, record);
   size_t contacts = 0;
   s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
   State st = state_of(*s);
   st.contacts = contacts;
+  st.chained_calls = s->thread_split().chained_calls;
   return st;
 }
 
@@ -106,6 +111,23 @@ void force_call(System& s, PairSlots* ps, double kick_h) {
   s.model->compute(c);
 }
 
+// Checks that two runs of make_box's problem ended in the same state, bit for bit; returns
+// the number of particles with any differing bit. The runs must exercise contacts (particle
+// and wall, frictional, rolling) and rebuilds (with re-sorting every 20 builds, the default).
+size_t expect_identical(const State& a, const State& b) {
+  EXPECT_GT(a.contacts, 10000u);
+  EXPECT_GT(a.builds, 20u);
+  EXPECT_EQ(a.id, b.id);
+  if (a.id != b.id) return a.id.size();
+  size_t differ = 0;
+  for (size_t i = 0; i < a.x.size(); ++i)
+    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+  EXPECT_EQ(differ, 0u);
+  EXPECT_TRUE(a.wall_force == b.wall_force);
+  EXPECT_EQ(a.builds, b.builds);
+  return differ;
+}
+
 }  // namespace
 
 TEST(Threads, OneAndTwoThreadsGiveIdenticalStates) {
@@ -113,19 +135,23 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStates) {
   omp_set_num_threads(1);  // what the other tests' fixture uses
   ASSERT_EQ(a.threads, 1);
   ASSERT_EQ(b.threads, 2);
-  // The run must exercise contacts (particle and wall, frictional, rolling) and rebuilds
-  // (with re-sorting every 20 builds, the default).
-  EXPECT_GT(a.contacts, 10000u);
-  EXPECT_GT(a.builds, 20u);
-  ASSERT_EQ(a.id, b.id);
-  size_t differ = 0;
-  for (size_t i = 0; i < a.x.size(); ++i)
-    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
-  EXPECT_EQ(differ, 0u);
-  EXPECT_TRUE(a.wall_force == b.wall_force);
-  EXPECT_EQ(a.builds, b.builds);
+  const size_t differ = expect_identical(a, b);
   std::printf("[info] threads test: %zu contact-steps, %llu builds\n", a.contacts, (unsigned long long)a.builds);
   report("threads 1 vs 2: particles with any differing bit (300, 400 steps)", double(differ), 0.0, 0, "==");
+}
+
+// The same in a column, where the two threads' force loop ends without the barrier: block 1's
+// particles that depend on block 0 are handed to thread 0 (PairSlots::HandOff), which
+// finishes them after its own sweep, kicks and drift included.
+TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
+  const State a = run(1, false, true), b = run(2, false, true);
+  omp_set_num_threads(1);
+  ASSERT_EQ(b.threads, 2);
+  EXPECT_EQ(a.chained_calls, 0u);
+  EXPECT_GT(b.chained_calls, 300u);  // of 400 steps' force calls (a skewed split may take the barrier)
+  expect_identical(a, b);
+  std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
+              (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
 }
 
 // The AVX2 screening (four list entries at a time) and the scalar one pick the same entries
@@ -507,7 +533,11 @@ TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
 // per-pair buffers gives forces, torques and contact history identical to one thread, bit
 // for bit.
 TEST(Threads, AnySplitOfTheForceLoopGivesIdenticalResults) {
-  auto s = make_box(1, false);
+  // A column (the same solids fraction as make_box's default box): its planes of cells, and
+  // so the rows a pair can reach across (PairSlots::span), are a small part of the particles,
+  // so that an even split ends without the barrier (blocks of at least 2 span rows) and a
+  // skewed one with it.
+  auto s = make_box(1, false, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125);
   s->run(150);
   ParticleStore& P = s->particles;
   const size_t n = P.size();
@@ -527,8 +557,9 @@ TEST(Threads, AnySplitOfTheForceLoopGivesIdenticalResults) {
     omp_set_num_threads(threads);
     PairSlots ps;  // kept across calls: later splits remap only near the boundaries
     const std::vector<std::vector<double>> splits =
-        threads == 2 ? std::vector<std::vector<double>>{{0.5, 0.5}, {0.15, 0.85}, {0.8, 0.2}, {0.45, 0.55}}
+        threads == 2 ? std::vector<std::vector<double>>{{0.5, 0.5}, {0.15, 0.85}, {0.8, 0.2}, {0.04, 0.96}, {0.45, 0.55}}
                      : std::vector<std::vector<double>>{{1. / 3, 1. / 3, 1. / 3}, {0.1, 0.2, 0.7}, {0.6, 0.3, 0.1}};
+    size_t chained = 0, barrier = 0;  // splits that ended without and with the barrier
     for (const auto& sh : splits) {
       if (ps.share.empty()) ps.update(s->nl, long(n), threads);  // sets up the shares' vector
       ps.share = sh;
@@ -539,7 +570,16 @@ TEST(Threads, AnySplitOfTheForceLoopGivesIdenticalResults) {
       for (size_t i = 0; i < n; ++i) bad += !(o.f[i] == ref.f[i] && o.t[i] == ref.t[i]);
       EXPECT_EQ(bad, 0u) << threads << " threads, share[0] " << sh[0];
       EXPECT_TRUE(o.hist == ref.hist) << threads << " threads, share[0] " << sh[0];
+      const bool was_chained = ps.chained_calls > chained;
+      EXPECT_EQ(was_chained, ps.chained) << threads << " threads, share[0] " << sh[0];
+      (was_chained ? chained : barrier) += 1;
+      std::printf("[info] %d threads, shares %.2f..: blocks %ld.., span %ld, %s\n", threads, sh[0],
+                  ps.bound[1] - ps.bound[0], ps.span, was_chained ? "chained" : "barrier");
     }
+    // Both ends of the force loop are exercised: handed over between neighbouring threads
+    // (every block at least twice the dependency span) and shared out after the barrier.
+    EXPECT_GT(chained, 0u) << threads << " threads";
+    EXPECT_GT(barrier, 0u) << threads << " threads";
   }
   omp_set_num_threads(1);
 }
