@@ -364,6 +364,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
     };
     const long a = block(tid), b = block(tid + 1);
+    // Rows from which a particle can depend on an earlier block: within PairSlots::span of
+    // the block's start (i - dep_lo[i] <= span for every i); without a PairSlots, any.
+    const long head_span = share ? c.slots->span : n;
     Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
     // next: the first particle of the block not yet finished or deferred. No particle depends
     // on a later row than its own, so every particle of the block is finished or deferred by
@@ -375,6 +378,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // Batches of kBatch entries (the last of the block shorter); i: the first row not yet
       // done, k: its first entry not yet screened. Rows done, [.., i), may be finished.
       long next = a, i = a;
+      const long head_end = kAllLocal ? a : std::min(b, a + head_span);
       for (uint32_t k = start[a]; i < b;) {
         const uint32_t ke = std::min(k + kBatch, start[b]);
         long i1 = i;  // the last row with entries in [k, ke), or the first row after them
@@ -382,13 +386,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
         i = i1;
         k = ke;
-        for (; next < i; ++next) {
-          // Every row of `next` is done and below b: local when none lies before a.
-          if (kAllLocal || long(dep_lo[next]) >= a)
+        // Every row of `next` is done and below b: local when none lies before a, which only
+        // the block's first `span` rows can fail (head_end; one thread: none).
+        for (const long h = std::min(i, head_end); next < h; ++next) {
+          if (long(dep_lo[next]) >= a)
             finish.template operator()<true>(next, a, b, drift);
           else
             defer(next);
         }
+        for (; next < i; ++next) finish.template operator()<true>(next, a, b, drift);
         swept_to(next);  // every particle before `next` is finished or deferred
       }
     };
