@@ -121,7 +121,11 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 LANES_FN V4 sqrt4(const V4 a) { return V4(_mm256_sqrt_pd(__m256d(a))); }
 /// std::max(a, 0.0) lane by lane: a < 0 ? 0 : a (a -0 or a NaN passes through, as there).
 LANES_FN V4 max0(const V4 a) { return V4(_mm256_max_pd(_mm256_setzero_pd(), __m256d(a))); }
-LANES_FN V4 sel(const M4 m, const V4 a, const V4 b) { return m ? a : b; }
+/// m ? a : b lane by lane, m a lane mask (all bits set or none): one blend on m's sign bits
+/// (`m ? a : b` also compares a mask loaded from the parameters with zero first).
+LANES_FN V4 sel(const M4 m, const V4 a, const V4 b) {
+  return V4(_mm256_blendv_pd(__m256d(b), __m256d(a), _mm256_castsi256_pd(__m256i(m))));
+}
 LANES_FN V4 splat(const double s) { return V4{s, s, s, s}; }
 LANES_FN void store(double* dst, const V4 a) { _mm256_storeu_pd(dst, __m256d(a)); }
 
@@ -585,13 +589,10 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   using LP = MepaLaneParams;
   const Par<kU, LP> par(P, G.p);
   const V4 dt = splat(in.dt);
-  // The records read whole, as they are written below: lanes of {Dmax, Dp, branch, fs.x},
-  // then {fs, kt_prev} (without rolling; at 24, overlapping) or {fs.y, fs.z, kt_prev, mk.x}
-  // and {mk.y, mk.z} (with rolling; at 32 and 64), by transposing the four records' bytes.
-  const Quads h0 = load_quads(H, G.k, 0);
-  const Quads h1 = load_quads(H, G.k, kRoll ? 4 : 3);
-  V4 mk_y, mk_z;
-  if constexpr (kRoll) load_pairs(H, G.k, 8, mk_y, mk_z);
+  // The records are read where each part is first used (fewer values held across the
+  // group): {Dmax, Dp} at 0, {fs, kt_prev} at 24 and, with rolling, mk at 56.
+  V4 Dmax, Dp;
+  load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
   // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
   // bounded below by the adhesive -A.
@@ -601,7 +602,6 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 D = d * dn1;
   const V4 A = par(&LP::kadh) * D;
   const V4 k1 = par(&LP::k1), k2 = par(&LP::k2);
-  const V4 Dmax = V4(h0.q[0]), Dp = V4(h0.q[1]);
   const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
   const M4 load = f2 >= f1;
   const M4 adh = ~load & ~(f2 > -A);
@@ -618,36 +618,31 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 fn = f_el + apply_limit4(par(&LP::limit), gamma, G.vn, f_el);
   const V4 fc = max0(sel(par(&LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
-  const V4 kt = sel(par(&LP::kt_const), par(&LP::kt_c),
-                    par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
-  L3 fs = kRoll ? L3{V4(h0.q[3]), V4(h1.q[0]), V4(h1.q[1])} : L3{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
-  V4 kt_prev = V4(h1.q[kRoll ? 2 : 3]);
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::gamma_t),
-                             par(&LP::mu), fc);
+  const V4 kt = sel(par(&LP::kt_const), par(&LP::kt_c), par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
+  const Quads h1 = load_quads(H, G.k, 3);
+  L3 fs{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
+  V4 kt_prev = V4(h1.q[3]);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
   const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
   // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
-  // stays zero as the scalar law leaves it.
+  // stays zero as the scalar law leaves it. {Dmax, Dp, branch, fs.x} at 0 and {fs, kt_prev}
+  // at 24 (fs.x written twice).
   const M4 br = load ? M4{1, 1, 1, 1} : (adh ? M4{3, 3, 3, 3} : M4{2, 2, 2, 2});
-  const Quads a0 = quads(Dmax1, Dp1, V4(br), fs.x);
+  store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
   if constexpr (kRoll) {
-    L3 mk{V4(h1.q[3]), mk_y, mk_z};
-    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                        par(&LP::damped), dt);
+    L3 mk = gather3(H, G.k, &LH::mk);
+    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt);
     put(G, g, alive, fn, ft, &mr, a, out);
-    // {Dmax, Dp, branch, fs.x} at 0, {fs.y, fs.z, kt_prev, mk.x} at 32, {mk.y, mk.z} at 64.
-    store_records(G, H, At<Quads>{0, a0}, At<Quads>{4, quads(fs.y, fs.z, kt_prev, mk.x)},
-                  At<Pairs>{8, pairs(mk.y, mk.z)});
+    store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});  // kt_prev again, the same
   } else {
     put(G, g, alive, fn, ft, nullptr, a, out);
-    // {Dmax, Dp, branch, fs.x} at 0 and {fs, kt_prev} at 24 (fs.x written twice).
-    store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
   }
 }
 
 }  // namespace
 
-#define COHDEM_LANES_ENTRY(name, group, roll)                                                                   \
+#define COHDEM_LANES_ENTRY(name, group, roll)                                                                         \
   __attribute__((target("avx2"))) void name(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,            \
                                             const uint32_t cnt, LaneOut& out) {                                         \
     drive<group<true, roll>, group<false, roll>>(in, hits, h0, cnt, out);                                               \
