@@ -133,32 +133,34 @@ LANES_FN void store(double* dst, const V4 a) { _mm256_storeu_pd(dst, __m256d(a))
 LANES_FN V4 gather(const double* __restrict a, const uint32_t* idx) {
   return V4{a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]]};
 }
-/// Member m of four records p[idx[0..3]].
-template <class T>
-LANES_FN V4 gather(const T* __restrict p, const uint32_t* idx, double T::*m) {
-  return V4{p[idx[0]].*m, p[idx[1]].*m, p[idx[2]].*m, p[idx[3]].*m};
-}
 
 /// A group's material pairs' parameters, lane by lane: par(&T::m) is member m in each lane,
-/// one broadcast where all four lanes share the pair (kU; one material, or the chute's
-/// flowing spheres among themselves; read from the pair's record, whose address is taken
-/// once per group), else gathered. A switch (uint64_t member) gives a lane mask.
+/// read from the pair's four copies (LaneParamsOf::wide: one aligned load, often an operand)
+/// where all four lanes share the pair (kU; one material, or the chute's flowing spheres
+/// among themselves), else gathered. A switch (uint64_t member) gives a lane mask.
 template <bool kU, class T>
 struct Par {
-  const T* __restrict P;
+  const LaneParamsOf<T>* __restrict P;
   const uint32_t* p;
-  const T* __restrict u;  ///< the pair of lane 0 (all lanes' where kU)
-  LANES_FN Par(const T* P_, const uint32_t* p_) : P(P_), p(p_), u(P_ + p_[0]) {}
+  const LaneParamsOf<T>* __restrict u;  ///< the pair of lane 0 (all lanes' where kU)
+  LANES_FN Par(const void* P_, const uint32_t* p_)
+      : P(static_cast<const LaneParamsOf<T>*>(P_)), p(p_), u(P + p_[0]) {}
+  /// The four copies of member m.
+  template <class F>
+  LANES_FN const uint64_t* wide(F T::*m) const {
+    const size_t f = size_t(reinterpret_cast<const char*>(&(u->p.*m)) - reinterpret_cast<const char*>(&u->p)) / 8;
+    return u->wide[f];
+  }
   LANES_FN V4 operator()(double T::*m) const {
-    if constexpr (kU) return splat(u->*m);
-    else return gather(P, p, m);
+    if constexpr (kU) return V4(_mm256_load_pd(reinterpret_cast<const double*>(wide(m))));
+    else return V4{P[p[0]].p.*m, P[p[1]].p.*m, P[p[2]].p.*m, P[p[3]].p.*m};
   }
   LANES_FN M4 operator()(uint64_t T::*m) const {
     if constexpr (kU) {
-      const long long s = (long long)(u->*m);
-      return M4{s, s, s, s};
+      return M4(_mm256_load_si256(reinterpret_cast<const __m256i*>(wide(m))));
     } else {
-      return M4{(long long)(P[p[0]].*m), (long long)(P[p[1]].*m), (long long)(P[p[2]].*m), (long long)(P[p[3]].*m)};
+      return M4{(long long)(P[p[0]].p.*m), (long long)(P[p[1]].p.*m), (long long)(P[p[2]].p.*m),
+                (long long)(P[p[3]].p.*m)};
     }
   }
 };
@@ -485,7 +487,7 @@ static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory,
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void linear_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const LinearLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, LinearEpsdLaneHistory, LinearLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
@@ -539,7 +541,7 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void hertz_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const HertzLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, HertzEpsdLaneHistory, HertzLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = HertzLaneParams;
@@ -583,7 +585,7 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void mepa_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const MepaLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, MepaEpsdLaneHistory, MepaLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = MepaLaneParams;
