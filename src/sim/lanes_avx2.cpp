@@ -277,7 +277,8 @@ LANES_FN void rotate_into_plane4(L3& h, const L3& n) {
 /// limit_scale (core/vec3.hpp) in lanes; over: m2 > lim^2.
 LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
   over = m2 > lim * lim;
-  return sel(over, lim / sqrt4(sel(over, m2, splat(1.0))), splat(1.0));
+  // (lanes not over take 1; what the division gives there is not used)
+  return sel(over, lim / sqrt4(m2), splat(1.0));
 }
 
 /// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
@@ -628,16 +629,19 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
   // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
-  // stays zero as the scalar law leaves it. {Dmax, Dp, branch, fs.x} at 0 and {fs, kt_prev}
-  // at 24 (fs.x written twice).
+  // stays zero as the scalar law leaves it. Without rolling: {Dmax, Dp, branch, fs.x} at 0
+  // and {fs, kt_prev} at 24 (fs.x written twice).
   const M4 br = load ? M4{1, 1, 1, 1} : (adh ? M4{3, 3, 3, 3} : M4{2, 2, 2, 2});
-  store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
   if constexpr (kRoll) {
+    // {Dmax, Dp, branch, fs.x} at 0 and {fs.y, fs.z} at 32 now, {kt_prev, mk} at 48 after
+    // the rolling.
+    store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Pairs>{4, pairs(fs.y, fs.z)});
     L3 mk = gather3(H, G.k, &LH::mk);
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt);
     put(G, g, alive, fn, ft, &mr, a, out);
-    store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});  // kt_prev again, the same
+    store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});
   } else {
+    store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
     put(G, g, alive, fn, ft, nullptr, a, out);
   }
 }
