@@ -334,8 +334,16 @@ LANES_FN void drive(const LaneInput& in, const ScreenHits& hits, const uint32_t 
 
 /// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
 /// two_eta_r = eta_r * 2.0; damped: eta_r > 0.
+/// EPSD's I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law
+/// tests I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is
+/// finite): J = I + m r^2 of a free body, 0 (not read) of a frozen one.
+LANES_FN V4 rolling_inertia4(const LaneInput& in, const Group& G) {
+  const V4 Ji = sel(G.fi, gather(in.inertia, G.i) + G.mi * G.ri * G.ri, splat(0.0));
+  const V4 Jj = sel(G.fj, gather(in.inertia, G.j) + G.mj * G.rj * G.rj, splat(0.0));
+  return sel(G.fj, sel(G.fi, Ji * Jj / (Ji + Jj), Jj), Ji);
+}
 LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, const V4 fc, const V4 mu_r,
-                  const V4 two_eta_r, const M4 damped, const V4 dt) {
+                  const V4 two_eta_r, const M4 damped, const V4 dt, const V4 Ir) {
   const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
   rotate_into_plane4(mk, G.n);
@@ -343,12 +351,6 @@ LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, cons
   mk = mk - wr * (kr * dt);
   M4 slide;
   mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
-  // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law tests
-  // I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is finite):
-  // J = I + m r^2 of a free body, 0 (not read) of a frozen one.
-  const V4 Ji = sel(G.fi, gather(in.inertia, G.i) + G.mi * G.ri * G.ri, splat(0.0));
-  const V4 Jj = sel(G.fj, gather(in.inertia, G.j) + G.mj * G.rj * G.rj, splat(0.0));
-  const V4 Ir = sel(G.fj, sel(G.fi, Ji * Jj / (Ji + Jj), Jj), Ji);
   const L3 damped_m = mk - wr * (two_eta_r * sqrt4(Ir * kr));
   // eta_r = 0 leaves the spring alone (the scalar law's branch; damped_m would differ from it
   // only in the sign of a zero, or where I_r k_r is not finite).
@@ -520,7 +522,7 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
   // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
   if constexpr (kRoll) {
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                        par(&LP::damped), splat(in.dt));
+                        par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
   } else {
@@ -571,7 +573,7 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
     const Quads h1 = load_quads(H, G.k, 3);
     L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                        par(&LP::damped), dt);
+                        par(&LP::damped), dt, rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
@@ -594,6 +596,9 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 dt = splat(in.dt);
   // The records are read where each part is first used (fewer values held across the
   // group): {Dmax, Dp} at 0, {fs, kt_prev} at 24 and, with rolling, mk at 56.
+  // EPSD's I_r first: its loads and its division overlap the normal law's square root.
+  V4 Ir{};
+  if constexpr (kRoll) Ir = rolling_inertia4(in, G);
   V4 Dmax, Dp;
   load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
@@ -637,7 +642,7 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
     // the rolling.
     store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Pairs>{4, pairs(fs.y, fs.z)});
     L3 mk = gather3(H, G.k, &LH::mk);
-    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt);
+    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt, Ir);
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});
   } else {
