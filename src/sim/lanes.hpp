@@ -15,6 +15,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <bit>
 #include <type_traits>
 
@@ -100,6 +101,22 @@ MepaLaneParams lane_params(const MepaEpsdLaw::Params& p);
 bool lane_usable(const MepaLaw::Params& p);
 bool lane_usable(const MepaEpsdLaw::Params& p);
 
+/// A material pair's lane parameters as the lanes read them: the fields (gathered lane by
+/// lane in a group of mixed pairs) and each field again in four copies, so that a group of
+/// one pair reads it with one aligned 32-byte load, or as an operand of the arithmetic,
+/// instead of a broadcast. Every field of P is 8 bytes (a double or a lane mask).
+template <class P>
+struct alignas(32) LaneParamsOf {
+  static constexpr size_t kFields = sizeof(P) / 8;
+  static_assert(sizeof(P) % 8 == 0 && alignof(P) == 8, "lane parameters are 8-byte fields");
+  uint64_t wide[kFields][4];
+  P p;
+  LaneParamsOf(const P& q) : p(q) {  // NOLINT: converts from lane_params()
+    for (size_t f = 0; f < kFields; ++f)
+      for (size_t l = 0; l < 4; ++l) std::memcpy(&wide[f][l], reinterpret_cast<const char*>(&q) + 8 * f, 8);
+  }
+};
+
 /// The laws' histories as the lanes read them (same_layout below checks them against
 /// ContactLaw::State): the tangential spring, its last stiffness where it can fall, EPSD's
 /// spring; MEPA's largest and plastic overlaps and branch first.
@@ -111,7 +128,7 @@ struct MepaLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_pre
 struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
-/// parameters (nmat x nmat, row = species of i, of the law's lane-parameter type) and the
+/// parameters (nmat x nmat, row = species of i, LaneParamsOf the law's lane-parameter type) and the
 /// contacts' histories (by list entry, of the law's lane-history type).
 struct LaneInput {
   const uint32_t* jdx;
@@ -162,7 +179,7 @@ struct LaneLaw {
 template <class Law, class P, LaneEval kEval>
 struct LaneLawOf {
   static constexpr bool kHave = true;
-  using Params = P;
+  using Params = LaneParamsOf<P>;
   static constexpr LaneEval eval = kEval;
   static bool usable(const typename Law::Params&) { return true; }
 };

@@ -121,7 +121,11 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 LANES_FN V4 sqrt4(const V4 a) { return V4(_mm256_sqrt_pd(__m256d(a))); }
 /// std::max(a, 0.0) lane by lane: a < 0 ? 0 : a (a -0 or a NaN passes through, as there).
 LANES_FN V4 max0(const V4 a) { return V4(_mm256_max_pd(_mm256_setzero_pd(), __m256d(a))); }
-LANES_FN V4 sel(const M4 m, const V4 a, const V4 b) { return m ? a : b; }
+/// m ? a : b lane by lane, m a lane mask (all bits set or none): one blend on m's sign bits
+/// (`m ? a : b` also compares a mask loaded from the parameters with zero first).
+LANES_FN V4 sel(const M4 m, const V4 a, const V4 b) {
+  return V4(_mm256_blendv_pd(__m256d(b), __m256d(a), _mm256_castsi256_pd(__m256i(m))));
+}
 LANES_FN V4 splat(const double s) { return V4{s, s, s, s}; }
 LANES_FN void store(double* dst, const V4 a) { _mm256_storeu_pd(dst, __m256d(a)); }
 
@@ -129,30 +133,37 @@ LANES_FN void store(double* dst, const V4 a) { _mm256_storeu_pd(dst, __m256d(a))
 LANES_FN V4 gather(const double* __restrict a, const uint32_t* idx) {
   return V4{a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]]};
 }
-/// Member m of four records p[idx[0..3]].
-template <class T>
-LANES_FN V4 gather(const T* __restrict p, const uint32_t* idx, double T::*m) {
-  return V4{p[idx[0]].*m, p[idx[1]].*m, p[idx[2]].*m, p[idx[3]].*m};
-}
 
-/// A material pair's parameter m in each lane: one broadcast where all four lanes share the
-/// pair (kU; one material, or the chute's flowing spheres among themselves), else gathered.
+/// A group's material pairs' parameters, lane by lane: par(&T::m) is member m in each lane,
+/// read from the pair's four copies (LaneParamsOf::wide: one aligned load, often an operand)
+/// where all four lanes share the pair (kU; one material, or the chute's flowing spheres
+/// among themselves), else gathered. A switch (uint64_t member) gives a lane mask.
 template <bool kU, class T>
-LANES_FN V4 par(const T* __restrict P, const uint32_t* p, double T::*m) {
-  if constexpr (kU) return splat(P[p[0]].*m);
-  else return gather(P, p, m);
-}
-
-/// A material pair's switch m (a lane mask) in each lane, as par.
-template <bool kU, class T>
-LANES_FN M4 par(const T* __restrict P, const uint32_t* p, uint64_t T::*m) {
-  if constexpr (kU) {
-    const long long s = (long long)(P[p[0]].*m);
-    return M4{s, s, s, s};
-  } else {
-    return M4{(long long)(P[p[0]].*m), (long long)(P[p[1]].*m), (long long)(P[p[2]].*m), (long long)(P[p[3]].*m)};
+struct Par {
+  const LaneParamsOf<T>* __restrict P;
+  const uint32_t* p;
+  const LaneParamsOf<T>* __restrict u;  ///< the pair of lane 0 (all lanes' where kU)
+  LANES_FN Par(const void* P_, const uint32_t* p_)
+      : P(static_cast<const LaneParamsOf<T>*>(P_)), p(p_), u(P + p_[0]) {}
+  /// The four copies of member m.
+  template <class F>
+  LANES_FN const uint64_t* wide(F T::*m) const {
+    const size_t f = size_t(reinterpret_cast<const char*>(&(u->p.*m)) - reinterpret_cast<const char*>(&u->p)) / 8;
+    return u->wide[f];
   }
-}
+  LANES_FN V4 operator()(double T::*m) const {
+    if constexpr (kU) return V4(_mm256_load_pd(reinterpret_cast<const double*>(wide(m))));
+    else return V4{P[p[0]].p.*m, P[p[1]].p.*m, P[p[2]].p.*m, P[p[3]].p.*m};
+  }
+  LANES_FN M4 operator()(uint64_t T::*m) const {
+    if constexpr (kU) {
+      return M4(_mm256_load_si256(reinterpret_cast<const __m256i*>(wide(m))));
+    } else {
+      return M4{(long long)(P[p[0]].p.*m), (long long)(P[p[1]].p.*m), (long long)(P[p[2]].p.*m),
+                (long long)(P[p[3]].p.*m)};
+    }
+  }
+};
 
 struct L3 { V4 x, y, z; };
 LANES_FN L3 operator-(const L3& a, const L3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
@@ -250,17 +261,24 @@ LANES_FN void rotate_into_plane4(L3& h, const L3& n) {
   L3 r = h - n * hn;
   const V4 hn2 = hn * hn;
   const V4 x = hn2 / m0;
-  const V4 fser = 1.0 + x * (0.5 + x * (0.375 + x * 0.3125));
-  const V4 m1 = dot3(r, r);
-  const V4 fex = sel(m1 > 0.0, sqrt4(m0 / m1), splat(1.0));
-  r = r * sel(hn2 < 1e-4 * m0, fser, fex);
-  h = sel3(m0 > 0.0, r, h);
+  V4 f = 1.0 + x * (0.5 + x * (0.375 + x * 0.3125));
+  // The exact factor (a division and a square root) only where a lane whose history is kept
+  // turned by more than the series covers: almost never (a branch that predicts well); the
+  // lanes take the same values as with both computed and selected.
+  const M4 series = hn2 < 1e-4 * m0, used = m0 > 0.0;
+  if (__builtin_expect(_mm256_movemask_pd(__m256d(used & ~series)) != 0, 0)) {
+    const V4 m1 = dot3(r, r);
+    f = sel(series, f, sel(m1 > 0.0, sqrt4(m0 / m1), splat(1.0)));
+  }
+  r = r * f;
+  h = sel3(used, r, h);
 }
 
 /// limit_scale (core/vec3.hpp) in lanes; over: m2 > lim^2.
 LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
   over = m2 > lim * lim;
-  return sel(over, lim / sqrt4(sel(over, m2, splat(1.0))), splat(1.0));
+  // (lanes not over take 1; what the division gives there is not used)
+  return sel(over, lim / sqrt4(m2), splat(1.0));
 }
 
 /// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
@@ -316,8 +334,16 @@ LANES_FN void drive(const LaneInput& in, const ScreenHits& hits, const uint32_t 
 
 /// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
 /// two_eta_r = eta_r * 2.0; damped: eta_r > 0.
+/// EPSD's I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law
+/// tests I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is
+/// finite): J = I + m r^2 of a free body, 0 (not read) of a frozen one.
+LANES_FN V4 rolling_inertia4(const LaneInput& in, const Group& G) {
+  const V4 Ji = sel(G.fi, gather(in.inertia, G.i) + G.mi * G.ri * G.ri, splat(0.0));
+  const V4 Jj = sel(G.fj, gather(in.inertia, G.j) + G.mj * G.rj * G.rj, splat(0.0));
+  return sel(G.fj, sel(G.fi, Ji * Jj / (Ji + Jj), Jj), Ji);
+}
 LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, const V4 fc, const V4 mu_r,
-                  const V4 two_eta_r, const M4 damped, const V4 dt) {
+                  const V4 two_eta_r, const M4 damped, const V4 dt, const V4 Ir) {
   const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
   rotate_into_plane4(mk, G.n);
@@ -325,12 +351,6 @@ LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, cons
   mk = mk - wr * (kr * dt);
   M4 slide;
   mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
-  // I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law tests
-  // I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is finite):
-  // J = I + m r^2 of a free body, 0 (not read) of a frozen one.
-  const V4 Ji = sel(G.fi, gather(in.inertia, G.i) + G.mi * G.ri * G.ri, splat(0.0));
-  const V4 Jj = sel(G.fj, gather(in.inertia, G.j) + G.mj * G.rj * G.rj, splat(0.0));
-  const V4 Ir = sel(G.fj, sel(G.fi, Ji * Jj / (Ji + Jj), Jj), Ji);
   const L3 damped_m = mk - wr * (two_eta_r * sqrt4(Ir * kr));
   // eta_r = 0 leaves the spring alone (the scalar law's branch; damped_m would differ from it
   // only in the sign of a zero, or where I_r k_r is not finite).
@@ -362,16 +382,23 @@ LANES_FN void put(const Group& G, const uint32_t g, const M4 alive, const V4 fn,
     ti = ti + *mr;
     tj = tj - *mr;
   }
-  store(out.fx + g, f.x);
-  store(out.fy + g, f.y);
-  store(out.fz + g, f.z);
-  store(out.tix + g, ti.x);
-  store(out.tiy + g, ti.y);
-  store(out.tiz + g, ti.z);
-  store(out.tjx + g, tj.x);
-  store(out.tjy + g, tj.y);
-  store(out.tjz + g, tj.z);
-  store(out.a + g, a);
+  // The ten stores at fixed offsets from one address (hidden from the optimizer, which
+  // otherwise keeps an address per array across the groups, spilled to the stack).
+  char* o = reinterpret_cast<char*>(&out) + size_t(g) * sizeof(double);
+  asm("" : "+r"(o));
+  auto st = [o](const size_t off, const V4 v) __attribute__((target("avx2"), always_inline)) {
+    store(reinterpret_cast<double*>(o + off), v);
+  };
+  st(offsetof(LaneOut, fx), f.x);
+  st(offsetof(LaneOut, fy), f.y);
+  st(offsetof(LaneOut, fz), f.z);
+  st(offsetof(LaneOut, tix), ti.x);
+  st(offsetof(LaneOut, tiy), ti.y);
+  st(offsetof(LaneOut, tiz), ti.z);
+  st(offsetof(LaneOut, tjx), tj.x);
+  st(offsetof(LaneOut, tjy), tj.y);
+  st(offsetof(LaneOut, tjz), tj.z);
+  st(offsetof(LaneOut, a), a);
 }
 
 /// The histories are written back one whole record per lane, from the lanes transposed
@@ -463,16 +490,17 @@ static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory,
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void linear_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const LinearLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, LinearEpsdLaneHistory, LinearLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
+  const Par<kU, LP> par(P, G.p);
   // LinearNormal.
-  const V4 kn = par<kU>(P, G.p, &LP::kn);
+  const V4 kn = par(&LP::kn);
   const M4 alive = G.delta > 0.0;
   const V4 f_el = kn * G.delta;
   V4 gamma;
-  const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+  const V4 fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
   const V4 fc = max0(fn);  // NormalBase::coulomb_base
   // LinearTangential: kt fixed per material pair. The records: {fs}, or {fs, mk} read as
   // {fs, mk.x} and {mk.y, mk.z}.
@@ -487,14 +515,14 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
     fs = gather3(H, G.k, &LH::fs);
   }
   rotate_into_plane4(fs, G.n);
-  const L3 ft = spring4(fs, G.vt, par<kU>(P, G.p, &LP::kt), splat(in.dt), par<kU>(P, G.p, &LP::damp_t) * gamma,
-                        par<kU>(P, G.p, &LP::mu), fc);
+  const L3 ft = spring4(fs, G.vt, par(&LP::kt), splat(in.dt), par(&LP::damp_t) * gamma,
+                        par(&LP::mu), fc);
   // LinearNormal's contact radius, read only when asked for.
   const V4 a = in.want_a ? sqrt4(G.rstar * G.delta) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
   if constexpr (kRoll) {
-    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
-                        par<kU>(P, G.p, &LP::damped), splat(in.dt));
+    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
+                        par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
   } else {
@@ -516,35 +544,36 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void hertz_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const HertzLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, HertzEpsdLaneHistory, HertzLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = HertzLaneParams;
+  const Par<kU, LP> par(P, G.p);
   const V4 dt = splat(in.dt);
   // HertzNormal (the lanes of ended contacts compute what no one reads).
   const M4 alive = G.delta > 0.0;
   const V4 a = sqrt4(G.rstar * G.delta);
-  const V4 kn = par<kU>(P, G.p, &LP::two_Estar) * a;
+  const V4 kn = par(&LP::two_Estar) * a;
   const V4 f_el = (2.0 / 3.0) * kn * G.delta;
   V4 gamma;
-  const V4 fn = f_el + damping4(par<kU>(P, G.p, &LP::two_beta), par<kU>(P, G.p, &LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+  const V4 fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
   const V4 fc = max0(fn);
   // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
   // The records read whole, as they are written below: {fs, kt_prev} at 0 and, with
   // rolling, {kt_prev, mk} at 24.
-  const V4 kt = par<kU>(P, G.p, &LP::eight_Gstar) * a;
+  const V4 kt = par(&LP::eight_Gstar) * a;
   const Quads h0 = load_quads(H, G.k, 0);
   L3 fs{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
   V4 kt_prev = V4(h0.q[3]);
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::damp_kt) * gamma,
-                             par<kU>(P, G.p, &LP::mu), fc);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::damp_kt) * gamma,
+                             par(&LP::mu), fc);
   // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
   if constexpr (kRoll) {
     const Quads h1 = load_quads(H, G.k, 3);
     L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
-    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
-                        par<kU>(P, G.p, &LP::damped), dt);
+    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
+                        par(&LP::damped), dt, rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
@@ -559,74 +588,72 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
 template <bool kU, bool kRoll>
 __attribute__((target("avx2"), always_inline)) inline void mepa_group(
     const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
-  const auto* const P = static_cast<const MepaLaneParams*>(in.params);
+  const void* const P = in.params;
   using LH = std::conditional_t<kRoll, MepaEpsdLaneHistory, MepaLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = MepaLaneParams;
+  const Par<kU, LP> par(P, G.p);
   const V4 dt = splat(in.dt);
-  // The records read whole, as they are written below: lanes of {Dmax, Dp, branch, fs.x},
-  // then {fs, kt_prev} (without rolling; at 24, overlapping) or {fs.y, fs.z, kt_prev, mk.x}
-  // and {mk.y, mk.z} (with rolling; at 32 and 64), by transposing the four records' bytes.
-  const Quads h0 = load_quads(H, G.k, 0);
-  const Quads h1 = load_quads(H, G.k, kRoll ? 4 : 3);
-  V4 mk_y, mk_z;
-  if constexpr (kRoll) load_pairs(H, G.k, 8, mk_y, mk_z);
+  // The records are read where each part is first used (fewer values held across the
+  // group): {Dmax, Dp} at 0, {fs, kt_prev} at 24 and, with rolling, mk at 56.
+  // EPSD's I_r first: its loads and its division overlap the normal law's square root.
+  V4 Ir{};
+  if constexpr (kRoll) Ir = rolling_inertia4(in, G);
+  V4 Dmax, Dp;
+  load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
   // delta^(n-1) = 1 (n = 1) or sqrt(delta) (n = 3/2); the branch of the larger of f1, f2,
   // bounded below by the adhesive -A.
   const M4 alive = G.delta > 0.0;
   const V4 d = G.delta;
-  const V4 dn1 = sel(par<kU>(P, G.p, &LP::n_is_1), splat(1.0), sqrt4(d));
+  const V4 dn1 = sel(par(&LP::n_is_1), splat(1.0), sqrt4(d));
   const V4 D = d * dn1;
-  const V4 A = par<kU>(P, G.p, &LP::kadh) * D;
-  const V4 k1 = par<kU>(P, G.p, &LP::k1), k2 = par<kU>(P, G.p, &LP::k2);
-  const V4 Dmax = V4(h0.q[0]), Dp = V4(h0.q[1]);
+  const V4 A = par(&LP::kadh) * D;
+  const V4 k1 = par(&LP::k1), k2 = par(&LP::k2);
   const V4 f1 = k1 * D, f2 = k2 * (D - Dp);
   const M4 load = f2 >= f1;
   const M4 adh = ~load & ~(f2 > -A);
   const V4 f = sel(load, f1, sel(adh, -A, f2));
-  const V4 Dp_new = D * par<kU>(P, G.p, &LP::plastic);
+  const V4 Dp_new = D * par(&LP::plastic);
   const V4 Dmax1 = sel(load, D, Dmax), Dp1 = sel(load, Dp_new, Dp);
-  const V4 f0 = par<kU>(P, G.p, &LP::f0);
+  const V4 f0 = par(&LP::f0);
   const V4 f_el = f0 + f;
   const V4 f_adh = A - f0;
-  const V4 kn = par<kU>(P, G.p, &LP::n_k2) * dn1;
+  const V4 kn = par(&LP::n_k2) * dn1;
   const V4 k_load = k1 * dn1;
   // ViscousDamping.
-  const V4 gamma = par<kU>(P, G.p, &LP::gamma_n);
-  const V4 fn = f_el + apply_limit4(par<kU>(P, G.p, &LP::limit), gamma, G.vn, f_el);
-  const V4 fc = max0(sel(par<kU>(P, G.p, &LP::offset), f_el + f_adh, f_el));  // coulomb_base
+  const V4 gamma = par(&LP::gamma_n);
+  const V4 fn = f_el + apply_limit4(par(&LP::limit), gamma, G.vn, f_el);
+  const V4 fc = max0(sel(par(&LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
-  const V4 kt = sel(par<kU>(P, G.p, &LP::kt_const), par<kU>(P, G.p, &LP::kt_c),
-                    par<kU>(P, G.p, &LP::kt_ratio) * k_load * par<kU>(P, G.p, &LP::kt_mult));
-  L3 fs = kRoll ? L3{V4(h0.q[3]), V4(h1.q[0]), V4(h1.q[1])} : L3{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
-  V4 kt_prev = V4(h1.q[kRoll ? 2 : 3]);
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par<kU>(P, G.p, &LP::gamma_t),
-                             par<kU>(P, G.p, &LP::mu), fc);
+  const V4 kt = sel(par(&LP::kt_const), par(&LP::kt_c), par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
+  const Quads h1 = load_quads(H, G.k, 3);
+  L3 fs{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
+  V4 kt_prev = V4(h1.q[3]);
+  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
   const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
   // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
-  // stays zero as the scalar law leaves it.
+  // stays zero as the scalar law leaves it. Without rolling: {Dmax, Dp, branch, fs.x} at 0
+  // and {fs, kt_prev} at 24 (fs.x written twice).
   const M4 br = load ? M4{1, 1, 1, 1} : (adh ? M4{3, 3, 3, 3} : M4{2, 2, 2, 2});
-  const Quads a0 = quads(Dmax1, Dp1, V4(br), fs.x);
   if constexpr (kRoll) {
-    L3 mk{V4(h1.q[3]), mk_y, mk_z};
-    const L3 mr = epsd4(in, G, mk, kn, fc, par<kU>(P, G.p, &LP::mu_r), par<kU>(P, G.p, &LP::two_eta_r),
-                        par<kU>(P, G.p, &LP::damped), dt);
+    // {Dmax, Dp, branch, fs.x} at 0 and {fs.y, fs.z} at 32 now, {kt_prev, mk} at 48 after
+    // the rolling.
+    store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Pairs>{4, pairs(fs.y, fs.z)});
+    L3 mk = gather3(H, G.k, &LH::mk);
+    const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt, Ir);
     put(G, g, alive, fn, ft, &mr, a, out);
-    // {Dmax, Dp, branch, fs.x} at 0, {fs.y, fs.z, kt_prev, mk.x} at 32, {mk.y, mk.z} at 64.
-    store_records(G, H, At<Quads>{0, a0}, At<Quads>{4, quads(fs.y, fs.z, kt_prev, mk.x)},
-                  At<Pairs>{8, pairs(mk.y, mk.z)});
+    store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});
   } else {
+    store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
     put(G, g, alive, fn, ft, nullptr, a, out);
-    // {Dmax, Dp, branch, fs.x} at 0 and {fs, kt_prev} at 24 (fs.x written twice).
-    store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(fs.x, fs.y, fs.z, kt_prev)});
   }
 }
 
 }  // namespace
 
-#define COHDEM_LANES_ENTRY(name, group, roll)                                                                   \
+#define COHDEM_LANES_ENTRY(name, group, roll)                                                                         \
   __attribute__((target("avx2"))) void name(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,            \
                                             const uint32_t cnt, LaneOut& out) {                                         \
     drive<group<true, roll>, group<false, roll>>(in, hits, h0, cnt, out);                                               \
