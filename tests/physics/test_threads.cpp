@@ -145,11 +145,16 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStates) {
 // finishes them after its own sweep, kicks and drift included.
 TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   const State a = run(1, false, true), b = run(2, false, true);
+  // Recording every pair's result (conduction, contact output): results stored by list
+  // entry rather than in compact slots, the same hand-off.
+  const State r = run(2, true, true);
   omp_set_num_threads(1);
   ASSERT_EQ(b.threads, 2);
   EXPECT_EQ(a.chained_calls, 0u);
   EXPECT_GT(b.chained_calls, 300u);  // of 400 steps' force calls (a skewed split may take the barrier)
+  EXPECT_GT(r.chained_calls, 300u);
   expect_identical(a, b);
+  expect_identical(a, r);
   std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
               (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
 }
