@@ -111,8 +111,8 @@ struct PairSlots {
   /// Per thread t > 0, in a chained force call: the particles of block t that depend on
   /// block t - 1, published (release) once thread t has swept its first `span` rows, for
   /// thread t - 1 to finish (acquire). `epoch` is the call's number, so no reset is needed
-  /// between calls (it wraps; only equality with the current call's number is asked). One
-  /// cache line each: the flag is spun on.
+  /// between calls (only equality with the current call's number is asked; never 0, which
+  /// a fresh record holds). One cache line each: the flag is spun on.
   struct alignas(64) HandOff {
     std::atomic<uint32_t> epoch{0};
     const uint32_t* list = nullptr;
@@ -124,12 +124,18 @@ struct PairSlots {
   uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
   /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
   /// before the parallel region).
+  /// At the wrap the records are cleared, so that no record keeps a number that a later
+  /// call gets (a record not written for 2^32 calls, the barrier taken meanwhile).
   uint32_t next_epoch(long nt) {
     if (hand_n < size_t(nt)) {
       hand = std::make_unique<HandOff[]>(size_t(nt));
       hand_n = size_t(nt);
     }
-    return ++epoch;
+    if (++epoch == 0) {
+      for (size_t t = 0; t < hand_n; ++t) hand[t].epoch.store(0, std::memory_order_relaxed);
+      epoch = 1;
+    }
+    return epoch;
   }
   /// Thread t's hand-off of its block's particles that depend on block t - 1 (the list is
   /// complete: none is added to it after this call, so its buffer stays where it is). Out of

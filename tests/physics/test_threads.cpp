@@ -491,6 +491,23 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
 // shares 1/2, 1/2 with times per unit 2 : 1 aim at 1/3, 2/3 and become 5/12, 7/12 (to
 // rounding: a few ulps of the divisions). Below kRebalanceCalls calls nothing moves; shares
 // that already aim where they are keep the split.
+// The hand-offs of the barrier-free force loop are matched by the call's number: never 0
+// (what a fresh record holds), and at the wrap of the 32-bit counter every record is
+// cleared, so that a record left from 2^32 calls ago cannot pass for the current call's.
+TEST(Threads, HandOffNumbersNeverMatchAStaleRecord) {
+  PairSlots ps;
+  EXPECT_EQ(ps.next_epoch(2), 1u);
+  ASSERT_EQ(ps.hand_n, 2u);
+  EXPECT_EQ(ps.hand[1].epoch.load(), 0u);
+  ps.hand[1].epoch.store(7);  // handed over in call 7, then the barrier for a long time
+  ps.epoch = ~uint32_t(0);
+  const uint32_t call = ps.next_epoch(2);
+  EXPECT_EQ(call, 1u);
+  EXPECT_EQ(ps.hand[1].epoch.load(), 0u);
+  for (uint32_t c = 2; c < 8; ++c) EXPECT_EQ(ps.next_epoch(2), c);
+  EXPECT_NE(ps.hand[1].epoch.load(), ps.epoch);  // call 7 again: the old record no longer matches
+}
+
 TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
   auto s = make_box(1, false);
   s->run(50);
