@@ -14,4 +14,13 @@ void reserve_headroom(V& v, size_t n) {
   if (v.capacity() < n) v.reserve(n + n / 8 + 64);
 }
 
+/// Grows v to at least n elements (never shrinks it), with headroom as above.
+template <class V>
+void grow_to(V& v, size_t n) {
+  if (v.size() < n) {
+    reserve_headroom(v, n);
+    v.resize(n);
+  }
+}
+
 }  // namespace cohdem

@@ -222,12 +222,7 @@ struct PairSlots {
     for (long t = 0; t < nt; ++t) chained = chained && bound[size_t(t + 1)] - bound[size_t(t)] >= 2 * span;
   }
   /// Grows the result buffer to the slots in use (with headroom: set-up, out of line).
-  [[gnu::noinline]] void fit(std::vector<PairResult>& pair) const {
-    if (pair.size() < count) {
-      reserve_headroom(pair, count);
-      pair.resize(count);
-    }
-  }
+  [[gnu::noinline]] void fit(std::vector<PairResult>& pair) const { grow_to(pair, count); }
   /// Modelled work of block t of the current split.
   uint64_t block_work(long t) const { return prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])]; }
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).

@@ -364,9 +364,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
     };
     const long a = block(tid), b = block(tid + 1);
-    // Rows from which a particle can depend on an earlier block: within PairSlots::span of
-    // the block's start (i - dep_lo[i] <= span for every i); without a PairSlots, any.
-    const long head_span = share ? c.slots->span : n;
+    // The block's head: the rows whose particles can depend on an earlier block, those within
+    // PairSlots::span of its start (i - dep_lo[i] <= span for every i); without a PairSlots,
+    // any.
+    const long head_end = share ? std::min(b, a + c.slots->span) : b;
     Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
     // next: the first particle of the block not yet finished or deferred. No particle depends
     // on a later row than its own, so every particle of the block is finished or deferred by
@@ -378,7 +379,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // Batches of kBatch entries (the last of the block shorter); i: the first row not yet
       // done, k: its first entry not yet screened. Rows done, [.., i), may be finished.
       long next = a, i = a;
-      const long head_end = kAllLocal ? a : std::min(b, a + head_span);
+      const long head = kAllLocal ? a : head_end;  // a local copy: kept in a register
       for (uint32_t k = start[a]; i < b;) {
         const uint32_t ke = std::min(k + kBatch, start[b]);
         long i1 = i;  // the last row with entries in [k, ke), or the first row after them
@@ -388,7 +389,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         k = ke;
         // Every row of `next` is done and below b: local when none lies before a, which only
         // the block's first `span` rows can fail (head_end; one thread: none).
-        for (const long h = std::min(i, head_end); next < h; ++next) {
+        for (const long h = std::min(i, head); next < h; ++next) {
           if (long(dep_lo[next]) >= a)
             finish.template operator()<true>(next, a, b, drift);
           else
@@ -421,7 +422,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // after its own sweep (acquire): they need rows of blocks t - 1 and t only, up to their
     // own. Otherwise all threads meet at the barrier and share the deferred particles out.
     const bool chain = share && c.slots->chained;
-    long hand_at = chain && tid > 0 ? std::min(a + c.slots->span, b) : std::numeric_limits<long>::max();
+    long hand_at = chain && tid > 0 ? head_end : std::numeric_limits<long>::max();
     auto hand_over = [&]() __attribute__((always_inline)) {
       c.slots->hand_over(tid, own, epoch);  // no particle is deferred after this point
       hand_at = std::numeric_limits<long>::max();
@@ -434,11 +435,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           [&](const long swept) __attribute__((always_inline)) {
             if (swept >= hand_at) hand_over();
           });
-    if (chain) {
+    if (share) {
       if (hand_at != std::numeric_limits<long>::max()) hand_over();  // an empty block
-      own.swap(c.slots->deferred[size_t(tid)]);  // the buffer handed over stays where it is
+      own.swap(c.slots->deferred[size_t(tid)]);  // a buffer handed over stays where it is
       double busy = omp_get_wtime() - t_sweep;
-      if (tid + 1 < nt) {
+      if (chain && tid + 1 < nt) {
         const PairSlots::HandOff& H = c.slots->wait_for(tid + 1, epoch);
         const double t0 = omp_get_wtime();
         const long ta = block(tid + 1), tb = block(tid + 2);
@@ -448,12 +449,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       c.slots->measured(tid, busy);
       if (tid == 0) {
         timed = true;
-        ++c.slots->chained_calls;
+        c.slots->chained_calls += chain;
       }
-    } else if (share) {
-      own.swap(c.slots->deferred[size_t(tid)]);
-      c.slots->measured(tid, omp_get_wtime() - t_sweep);
-      if (tid == 0) timed = true;
+    }
+    // Chained: done, the region's join is the only meeting. Otherwise the barrier, then the
+    // particles left for after it.
+    if (share && !chain) {
 #pragma omp barrier
       size_t total = 0;
       for (long t = 0; t < nt; ++t) total += c.slots->deferred[size_t(t)].size();
@@ -466,7 +467,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb, drift);
         base += list.size();
       }
-    } else {
+    } else if (!share) {
 #pragma omp barrier
       for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
     }

@@ -206,10 +206,7 @@ void System::compute_forces(double kick_h, bool open_next) {
   if (rev_.size() < particles.size()) rev_.resize(particles.size());
   if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
   if (record) {
-    if (a_pair_.size() < np) {
-      reserve_headroom(a_pair_, np);
-      a_pair_.resize(np);
-    }
+    grow_to(a_pair_, np);
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
@@ -227,10 +224,7 @@ void System::compute_forces(double kick_h, bool open_next) {
   ctx.a_wall = record ? a_wall_.data() : nullptr;
   // The per-pair results exist only when read (one thread without recording never touches
   // them: 48 bytes per list entry saved).
-  if (ctx.needs_pair_buffer(long(particles.size())) && pair_.size() < np) {
-    reserve_headroom(pair_, np);
-    pair_.resize(np);
-  }
+  if (ctx.needs_pair_buffer(long(particles.size()))) grow_to(pair_, np);
   model->compute(ctx);
 
   // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
