@@ -20,6 +20,14 @@ its summary.json, which times the step loop only, as LAMMPS's "Loop time" does),
 best of the runs, the ratio cohdem/peer, and the physics after the same simulated time:
 translational kinetic energy and mean flow velocity of the free particles (x for the chute,
 z for the packing). Results also go to OUT/results.json. Python 3 standard library only.
+
+Pinning (one thread and one rank, the default): every run of round r is pinned to the same
+core, core r mod (cores this process may use), so that within a round every code runs on the
+same core, and over the rounds every code gets every core equally. On a virtual machine the
+cores need not be equally fast: on the development VM one core ran this code's one-thread
+runs 1.35x slower than the other for minutes at a time, and an unpinned run lands on either,
+so the codes' ratios swung with where the scheduler put them. The core of each run is
+printed; `--no-pin` runs unpinned.
 """
 import argparse
 import json
@@ -35,10 +43,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 
 
-def sh(cmd, cwd, log):
-    """Runs cmd (list), output to log; returns the output text. Raises on failure."""
+def sh(cmd, cwd, log, cpu=None):
+    """Runs cmd (list), output to log; returns the output text. Raises on failure. cpu: the
+    core the run is pinned to (None: not pinned)."""
+    pin = None if cpu is None else (lambda: os.sched_setaffinity(0, {cpu}))
     with open(log, "w") as f:
-        r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT)
+        r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin)
     text = open(log).read()
     if r.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}); see {log}:\n{text[-2000:]}")
@@ -155,6 +165,8 @@ def main():
     ap.add_argument("--peers", default="lammps,liggghts")
     ap.add_argument("--threads", type=int, default=1, help="cohdem OpenMP threads")
     ap.add_argument("--mpi", type=int, default=1, help="MPI ranks of the peers (mpirun -np)")
+    ap.add_argument("--no-pin", action="store_true",
+                    help="do not pin one-thread runs to a core (default: round r on core r mod cores)")
     add_input_args(ap, os.path.join(REPO, "build", "bench", "peers"))
     a = ap.parse_args()
 
@@ -176,6 +188,8 @@ def main():
     prepare_inputs(work, problems, a.chute_data, a.packing_n)
 
     mpi = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(a.mpi)] if a.mpi > 1 else []
+    # The cores of the rounds (one thread and one rank only: wider runs need every core).
+    cores = sorted(os.sched_getaffinity(0)) if a.threads == 1 and a.mpi == 1 and not a.no_pin else []
     probs = problem_table()
     results = {}
     for pname in problems:
@@ -186,21 +200,26 @@ def main():
         print(f"\n== {pname}: {nsteps} steps, {a.runs} interleaved runs per code "
               f"(cohdem {a.threads} thread(s), peers {a.mpi} rank(s))", flush=True)
         for run in range(a.runs):
+            cpu = cores[run % len(cores)] if cores else None
             for c in codes:
                 log = os.path.join(work, f"{pname}.{c}.{run}.log")
                 if c == "cohdem":
                     out = os.path.join(work, f"{pname}.cohdem.out")
-                    sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log)
+                    sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log, cpu)
                     j = cohdem_summary(out, nsteps)
                     r = (j["particle_steps_per_s"], j["translational_energy"], j["rotational_energy"],
                          j["mean_velocity"][P.vel_axis])
                 else:
-                    r = parse_peer(sh(mpi + P.command(c, nsteps), work, log), nsteps)
+                    r = parse_peer(sh(mpi + P.command(c, nsteps), work, log, cpu), nsteps)
                 res[c]["rate"].append(r[0])
+                res[c].setdefault("cpu", []).append(cpu)
                 res[c]["ke"], res[c]["ke_rot"], res[c]["v"] = r[1], r[2], r[3]
-                print(f"  run {run + 1} {c:8s} {r[0]:10.4g} particle-steps/s", flush=True)
+                where = f" (core {cpu})" if cpu is not None else ""
+                print(f"  run {run + 1} {c:8s} {r[0]:10.4g} particle-steps/s{where}", flush=True)
         ax = "xyz"[P.vel_axis]
-        print(f"\n  {'code':9s} {'median':>10s} {'best':>10s}  {'cohdem/peer (median, best)':>27s}  "
+        # paired: the median over the rounds of cohdem's rate over the peer's in the same round
+        # (the same core, minutes apart at most).
+        print(f"\n  {'code':9s} {'median':>10s} {'best':>10s}  {'cohdem/peer (median, best, paired)':>35s}  "
               f"{'KE_trans':>12s} {'KE_rot':>10s} {'v_' + ax:>10s}  physics")
         c0 = res["cohdem"]
         for c in codes:
@@ -212,14 +231,15 @@ def main():
             if c != "cohdem":
                 R["ratio_median"] = statistics.median(c0["rate"]) / med
                 R["ratio_best"] = max(c0["rate"]) / best
-                ratio = f"{R['ratio_median']:.2f}x, {R['ratio_best']:.2f}x"
+                R["ratio_paired"] = statistics.median(x / y for x, y in zip(c0["rate"], R["rate"]))
+                ratio = f"{R['ratio_median']:.2f}x, {R['ratio_best']:.2f}x, {R['ratio_paired']:.2f}x"
                 dke = abs(c0["ke"] - R["ke"]) / abs(R["ke"])
                 dv = abs(c0["v"] - R["v"]) / max(abs(R["v"]), 1e-12)
                 R["rel_diff_ke"], R["rel_diff_v"] = dke, dv
                 ok = dke <= P.physics_tol and dv <= P.physics_tol
                 R["physics_ok"] = ok
                 phys = f"dKE {dke:.2e}, dv {dv:.2e}: {'ok' if ok else 'DIFFERS'} (tol {P.physics_tol:g})"
-            print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>27s}  {R['ke']:12.7g} {R['ke_rot']:10.5g} "
+            print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>35s}  {R['ke']:12.7g} {R['ke_rot']:10.5g} "
                   f"{R['v']:10.6g}  {phys}")
         if P.note:
             print(f"  note: {P.note}")

@@ -20,7 +20,16 @@ each problem, two independent one-thread runs started together (no shared data, 
 synchronisation); the median of their summed rates over the median one-thread rate is the
 most any two-thread code can reach here, and the table's last column sets the two-thread
 speed-up against it (on a virtual machine whose second core is shared with other work, two
-processes can give well under 2x). Python 3 stdlib only.
+processes can give well under 2x).
+
+--per-core also runs the one-thread case pinned to each core in turn, in every repeat. The
+cores of a virtual machine need not be equally fast (on the development VM one core ran
+1.35x slower than the other for minutes at a time, and an unpinned one-thread run lands on
+either), so a two-thread speed-up over "the" one-thread rate depends on where that run
+landed. The table then adds, for two threads: the speed-up over the mean of the cores'
+one-thread medians (on equal cores, the usual speed-up) and over the fastest core's, and the
+efficiency, the two-thread median over the sum of the cores' one-thread medians. Python 3
+stdlib only.
 """
 import argparse
 import json
@@ -44,6 +53,8 @@ def main():
     ap.add_argument("--chute", action="store_true", help="add LAMMPS's chute benchmark (32,000 spheres)")
     ap.add_argument("--ceiling", action="store_true",
                     help="also run two independent one-thread runs at once: what two cores give here")
+    ap.add_argument("--per-core", action="store_true",
+                    help="also run one thread pinned to each core: speed-ups over the mean and the fastest core")
     ap.add_argument("--chute-data", default=os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute"))
     a = ap.parse_args()
     sizes = [int(float(x)) for x in a.sizes.split(",")]
@@ -65,6 +76,7 @@ def main():
         subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), a.chute_data,
                         os.path.join(HERE, "chute.toml"), "-o", case], check=True)
         probs.append(("chute", "32,000 (chute)", case))
+    cores = sorted(os.sched_getaffinity(0))[:2] if a.per_core else []
     def cmd(case, t, out):
         return [a.cohdem, "run", case, "--set", f"simulation.duration={a.steps * 1e-4!r}", "--threads", str(t),
                 "--out", out, "--quiet"]
@@ -82,6 +94,13 @@ def main():
                 allr.setdefault(k, []).append(rate)
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
+            for cpu in cores:
+                out = os.path.join(a.out, f"run_{key}_core{cpu}")
+                subprocess.run(cmd(case, 1, out), check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               preexec_fn=lambda c=cpu: os.sched_setaffinity(0, {c}))
+                rate = json.load(open(os.path.join(out, "summary.json")))["particle_steps_per_s"]
+                allr.setdefault((key, f"core{cpu}"), []).append(rate)
+                print(f"  run {r + 1}: {label:>16s}, 1 thread on core {cpu}: {rate:10.4g} particle-steps/s", flush=True)
             if a.ceiling:
                 outs = [os.path.join(a.out, f"run_{key}_pair{q}") for q in (0, 1)]
                 procs = [subprocess.Popen(cmd(case, 1, o), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -123,6 +142,20 @@ def main():
                          "median_particle_steps_per_s": med, "contacts": j["contacts"],
                          "peak_rss_run_bytes": j["peak_rss_run_bytes"], "peak_rss_bytes": j["peak_rss_bytes"],
                          "two_runs_at_once": pair.get(key) if t == 2 else None})
+    if cores and 2 in threads:
+        print(f"\ntwo threads against the cores' one-thread rates (medians of {a.repeat} runs)")
+        print("| particles | " + " | ".join(f"1 thread, core {c}" for c in cores) +
+              " | 2 threads | 2 threads / mean core | 2 threads / fastest core | efficiency (2 threads / sum) |")
+        print("|---:|" + "---:|" * (len(cores) + 4))
+        for key, label, _ in probs:
+            per = [statistics.median(allr[(key, f"core{c}")]) for c in cores]
+            two = statistics.median(allr[(key, 2)])
+            mean = sum(per) / len(per)
+            print(f"| {label} | " + " | ".join(f"{x:.3g}" for x in per) +
+                  f" | {two:.3g} | {two / mean:.2f} | {two / max(per):.2f} | {two / sum(per):.2f} |")
+            for row in rows:
+                if row["problem"] == label and row["threads"] == 2:
+                    row["one_thread_per_core"] = dict(zip(map(str, cores), per))
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):
