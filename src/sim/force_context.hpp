@@ -81,11 +81,6 @@ struct PairSlots {
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
   std::vector<std::vector<uint32_t>> deferred;
-  /// Per thread, during a force evaluation with the fused opening: its share of the
-  /// displacements, merged by the caller after the region (one cache line each; a critical
-  /// section at the region's end held the threads up when they reached it together).
-  struct alignas(64) DriftSlot { Drift d; };
-  std::vector<DriftSlot> drifts;
   /// What the split and the map were made for: the list build, thread and particle counts.
   uint64_t builds = ~uint64_t(0);
   long threads = 0, n = 0;

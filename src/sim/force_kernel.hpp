@@ -154,7 +154,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       slot_of = c.slots->of.data();
     }
     if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
-    if (c.slots->drifts.size() < size_t(nt)) c.slots->drifts.resize(size_t(nt));
   };
   const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
   // The call's number for the chained finishing's hand-offs (PairSlots::HandOff).
@@ -170,7 +169,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // instructions per particle-step, bit-identical). res and slot_of stay shared: a team of
   // another size sets them inside the region.
   bool timed = false;  // the region's threads timed their sweeps
-  long team = 0;       // threads that left their displacements in PairSlots::drifts
 #pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
                                                   inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
                                                   keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd, \
@@ -473,21 +471,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
 #pragma omp barrier
       for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
     }
-    // This thread's displacements: into its slot (merged below), one thread straight into
-    // the total, several without a PairSlots through a critical section.
     if (open_dt > 0) {
-      if (share) {
-        c.slots->drifts[size_t(tid)].d = drift;
-      } else if (nt == 1) {
-        c.drift->merge(drift);
-      } else {
 #pragma omp critical(cohdem_fused_drift)
-        c.drift->merge(drift);  // max / min / or: the same in any order
-      }
+      c.drift->merge(drift);  // max / min / or: the same in any order
     }
-    if (share && tid == 0) team = nt;
   }
-  for (long t = 0; open_dt > 0 && t < team; ++t) c.drift->merge(c.slots->drifts[size_t(t)].d);
   if (timed) c.slots->rebalance();
 }
 
