@@ -3,8 +3,9 @@
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
 # steps, model_cost.py prints its four rows, instructions.py counts a small packing,
-# contact_instructions.py the force loop's instructions per contact of two laws and
-# scaling.py gives its table for a small gas (with --ceiling).
+# contact_instructions.py the force loop's instructions per contact of two laws,
+# scaling.py gives its table for a small gas (with --ceiling and --per-core) and
+# peer_compare.py pins its rounds to the cores.
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
 set -u
@@ -75,17 +76,32 @@ sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   contact_instruction
 else
   echo "skip contact_instructions.py ($bench_bin not built: COHDEM_BUILD_BENCH=OFF)"
 fi
-# scaling.py end to end (a 1000-sphere gas, 3 steps, 1 and 2 threads, and --ceiling's two
-# one-thread runs at once): a row per thread count, positive rates and bytes per particle,
-# and the two runs' summed rate recorded against the one-thread run.
-if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat 1 --ceiling --cohdem "$bin" \
+# scaling.py end to end (a 1000-sphere gas, 3 steps, 1 and 2 threads, --ceiling's two
+# one-thread runs at once and --per-core's one-thread runs pinned to each core): a row per
+# thread count, positive rates and bytes per particle, the two runs' summed rate recorded
+# against the one-thread run, and a one-thread rate per core (the first two this process
+# may use).
+if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat 1 --ceiling --per-core --cohdem "$bin" \
      --out "$work/sc" > "$work/sc.log" 2>&1 &&
    python3 -c "
-import json, math, sys
+import json, math, os, sys
 rows = json.load(open('$work/sc/scaling.json'))['rows']
 ok = [r['threads'] for r in rows] == [1, 2] and all(r['particle_steps_per_s'] > 0 and r['peak_rss_run_bytes'] > 0 for r in rows)
 c = rows[1]['two_runs_at_once']
 ok = ok and c is not None and len(c) == 1 and math.isfinite(c[0]) and c[0] > 0
-sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
+per = rows[1].get('one_thread_per_core', {})
+cores = sorted(os.sched_getaffinity(0))[:2]
+ok = ok and sorted(map(int, per)) == cores and all(math.isfinite(v) and v > 0 for v in per.values())
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
+# peer_compare.py's pinning without peers (cohdem alone, the chute, 2 rounds of 3 steps):
+# round r ran on core r mod (cores this process may use), recorded per run.
+if python3 "$src/bench/peer_compare.py" --peers "" --problems chute --runs 2 --steps 3 --cohdem "$bin" \
+     --chute-data "$data" --out "$work/pc" > "$work/pc.log" 2>&1 &&
+   python3 -c "
+import json, os, sys
+r = json.load(open('$work/pc/results.json'))['results']['chute']['codes']['cohdem']
+cores = sorted(os.sched_getaffinity(0))
+ok = r['cpu'] == [cores[k % len(cores)] for k in range(2)] and len(r['rate']) == 2 and all(x > 0 for x in r['rate'])
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
