@@ -25,7 +25,7 @@ Pinning (one thread and one rank, the default): every run of round r is pinned t
 core, core r mod (cores this process may use), so that within a round every code runs on the
 same core, and over the rounds every code gets every core equally. On a virtual machine the
 cores need not be equally fast: on the development VM one core ran this code's one-thread
-runs 1.35x slower than the other for minutes at a time, and an unpinned run lands on either,
+runs 1.35-2x slower than the other for minutes at a time, and an unpinned run lands on either,
 so the codes' ratios swung with where the scheduler put them. The core of each run is
 printed; `--no-pin` runs unpinned.
 """

@@ -24,7 +24,7 @@ processes can give well under 2x).
 
 --per-core also runs the one-thread case pinned to each core in turn, in every repeat. The
 cores of a virtual machine need not be equally fast (on the development VM one core ran
-1.35x slower than the other for minutes at a time, and an unpinned one-thread run lands on
+1.35-2x slower than the other for minutes at a time, and an unpinned one-thread run lands on
 either), so a two-thread speed-up over "the" one-thread rate depends on where that run
 landed. The table then adds, for two threads: the speed-up over the mean of the cores'
 one-thread medians (on equal cores, the usual speed-up) and over the fastest core's, and the

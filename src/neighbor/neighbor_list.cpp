@@ -248,7 +248,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   wstart.resize(n + 1);
   wstart[0] = 0;
   wall.clear();
-  wall_linked.clear();
   for (size_t i = 0; i < n; ++i) {
     if (flag[i] == kFree)
       for (size_t w = 0; w < wide_.size(); ++w) {
@@ -257,7 +256,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         if (wide_[w].contact(x[i], rad[i], nn, delta) && delta > -(skin + reach)) wall.push_back(uint16_t(w));
       }
     wstart[i + 1] = uint32_t(wall.size());
-    if (wstart[i + 1] > wstart[i] || flag[i] == kAttached) wall_linked.push_back(uint32_t(i));
   }
 
   // 6. Carry history over, from each live contact of the old lists to its entry in the new

@@ -114,9 +114,6 @@ class NeighborList {
   /// (System::step_once(true)) only they are left for the particle pass, which then skips
   /// the others without reading their flags (and without a parallel region when none is).
   std::vector<uint32_t> attached;
-  /// Particles with wall entries or attached to a wall at the build, ascending: the only ones
-  /// the wall totals (System::compute_forces) read.
-  std::vector<uint32_t> wall_linked;
   /// The species every particle had at the build, or -1 when they differ (or there are
   /// none): with one, every pair's material parameters are the same, and the force loop
   /// reads no species (species change only with a rebuild: adding or removing particles).
