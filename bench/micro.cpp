@@ -180,6 +180,31 @@ void BM_CaseStep(benchmark::State& st) {
   st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
 }
 
+/// The neighbor build of a case in mid-run (default: the chute, as BM_CaseStep): the case is
+/// run for COHDEM_BENCH_WARM steps (default 300), so that its particles have left the cell
+/// order of the last re-sort as they do between re-sorts, then the lists are rebuilt from that
+/// state (no re-sort; the live contacts' history carried over each time). Arg: threads.
+void BM_CaseNeighborBuild(benchmark::State& st) {
+  const char* env = std::getenv("COHDEM_BENCH_CASE");
+  const std::string path = env ? env : "build/bench/chute.toml";
+  const char* warm = std::getenv("COHDEM_BENCH_WARM");
+  std::unique_ptr<System> s;
+  try {
+    const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
+    s = build_system(c);
+    s->prepare();
+    s->run(uint64_t(warm ? std::atol(warm) : 300));
+  } catch (const std::exception& e) {
+    st.SkipWithError((path + ": " + e.what()).c_str());
+    return;
+  }
+  const double reach = s->reach();
+  for (auto _ : st) s->nl.build(s->particles, s->walls, s->cfg.domain, s->cfg.skin, reach, false);
+  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
+  st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
+  st.counters["lost_contacts"] = double(s->nl.stats.lost_contacts);
+}
+
 /// COHDEM_BENCH_ITERS=N fixes the iteration count (for valgrind/callgrind comparisons).
 benchmark::internal::Benchmark* iters(benchmark::internal::Benchmark* b) {
   if (const char* e = std::getenv("COHDEM_BENCH_ITERS")) b->Iterations(std::atol(e));
@@ -207,6 +232,8 @@ void register_all() {
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
   }
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+  iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))
+      ->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_NeighborBuild", BM_NeighborBuild)->Arg(32)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_NeighborBuildWithHistory", BM_NeighborBuildWithHistory)
       ->Arg(32)->Unit(benchmark::kMicrosecond);
