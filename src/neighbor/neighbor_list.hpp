@@ -183,8 +183,9 @@ class NeighborList {
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
   std::vector<Wall> wide_;
-  std::vector<std::vector<uint32_t>> tl_jdx_;  // per-thread pair rows during a build
-  std::vector<std::vector<uint8_t>> tl_img_;
+  std::vector<std::vector<uint64_t>> tl_key_;  // per-chunk pairs found, (lower << 32) | higher
+  std::vector<std::vector<uint8_t>> tl_img_;   // their images, seen from the lower
+  std::vector<size_t> tl_cnt_;                 // their counts (the buffers keep their length)
   // The previous lists during a build (swapped, not copied) and the ids of their rows.
   std::vector<uint64_t> ids_, old_ids_;
   std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, new_of_id_;

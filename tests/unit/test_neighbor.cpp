@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "core/rng.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -71,9 +72,67 @@ void check(bool periodic, bool resort) {
   EXPECT_EQ(nl.rpair.size(), nl.jdx.size());
 }
 
+// Every image: in a periodic direction only 1.2 to 4.5 cutoffs long, one or two cells wide
+// (the full stencil, which visits a cell under each of its images) or three and four (the
+// half stencil, each pair of cells searched once, from the cell behind). A pair of particles
+// may then lie within the cutoff under two images (1.2 cutoffs: at d and L - d), and is
+// listed once per image. One particle in ten is frozen: pairs of two fixed bodies are not
+// listed. Compared as multisets of (lower id, higher id, distance to 1e-12 m) against all
+// pairs and images by brute force.
+void check_images(const double ncut, const bool resort) {
+  const double skin = 2e-4, rmax = 7.5e-4, cut = 2 * rmax + skin;
+  const Vec3 L{ncut * cut, 0.012, ncut * cut};
+  ParticleStore p;
+  Rng rng(uint64_t(ncut * 10) + resort);
+  const size_t n = size_t(6000 * L.x * L.y * L.z / (0.02 * 0.02 * 0.02)) + 40;  // four times the bed above
+  for (size_t i = 0; i < n; ++i) {
+    p.add(5000 - 3 * i, 0, rng.uniform(2.5e-4, rmax), 1000, {rng.uniform(0, L.x), rng.uniform(0, L.y), rng.uniform(0, L.z)});
+    if (i % 10 == 3) p.flag[i] = kFrozen;
+  }
+  Domain d;
+  d.lo = {0, 0, 0};
+  d.hi = L;
+  d.periodic = {true, false, true};
+  NeighborList nl;
+  nl.hist.stride = nl.whist.stride = 8;
+  nl.build(p, {}, d, skin, 0.0, resort);
+  using Key = std::tuple<uint64_t, uint64_t, long long>;
+  std::multiset<Key> want, got;
+  for (size_t a = 0; a < p.size(); ++a)
+    for (size_t b = a + 1; b < p.size(); ++b) {
+      if (p.flag[a] != kFree && p.flag[b] != kFree) continue;
+      for (int sx = -1; sx <= 1; ++sx)
+        for (int sz = -1; sz <= 1; ++sz) {
+          const double dist = norm(p.x[a] - p.x[b] - Vec3{sx * L.x, 0, sz * L.z});
+          if (dist < p.radius[a] + p.radius[b] + skin)
+            want.insert({std::min(p.id[a], p.id[b]), std::max(p.id[a], p.id[b]), std::llround(dist * 1e12)});
+        }
+    }
+  for (size_t i = 0; i < p.size(); ++i)
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+      const uint32_t j = nl.jdx[k];
+      EXPECT_LT(i, size_t(j)) << "pair not in the row of its lower index";
+      const double dist = norm(p.x[i] - p.x[j] - nl.shift[nl.image[k]]);
+      got.insert({std::min(p.id[i], p.id[j]), std::max(p.id[i], p.id[j]), std::llround(dist * 1e12)});
+    }
+  EXPECT_EQ(got.size(), want.size()) << ncut << " cutoffs";
+  EXPECT_TRUE(got == want) << ncut << " cutoffs: listed pairs and images differ from brute force";
+  size_t two_images = 0;  // pairs listed under two images (the narrowest box has some)
+  for (auto it = want.begin(); it != want.end(); ++it) {
+    auto nx = std::next(it);
+    two_images += nx != want.end() && std::get<0>(*nx) == std::get<0>(*it) && std::get<1>(*nx) == std::get<1>(*it);
+  }
+  if (ncut < 2) EXPECT_GT(two_images, 0u) << "the narrow box should hold pairs seen under two images";
+  EXPECT_GT(want.size(), n / 2) << "too few pairs to test";
+}
+
 }  // namespace
 
 TEST(NeighborList, MatchesBruteForceSizeRatio3) { check(false, false); }
+TEST(NeighborList, EveryImageInNarrowPeriodicBoxes) {
+  for (const double ncut : {1.2, 2.5, 3.5, 4.5})
+    for (const bool resort : {false, true}) check_images(ncut, resort);
+}
 TEST(NeighborList, MatchesBruteForcePeriodic) { check(true, false); }
 TEST(NeighborList, MatchesBruteForceAfterResort) { check(true, true); }
 
