@@ -99,11 +99,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     p.permute(cell_list_);
     bin();
   }
-  // Particles in cell order (just re-sorted, or still so): every particle of a cell before
-  // a's has a lower index than a, and the binning is the identity (cell_list_[q] == q), so
-  // the pair search skips them whole (it keeps partners of higher index only).
-  bool in_cell_order = true;
-  for (size_t i = 1; i < n && in_cell_order; ++i) in_cell_order = cell_of_[i - 1] <= cell_of_[i];
   one_species = n > 0 ? p.species[0] : -1;
   for (size_t i = 1; i < n && one_species >= 0; ++i)
     if (p.species[i] != one_species) one_species = -1;

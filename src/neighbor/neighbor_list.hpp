@@ -2,7 +2,9 @@
 // candidates, and the contact history that rides on both.
 //
 // - Cells are at least (2 r_max + skin + reach) wide, so any size ratio is handled (each
-//   pair is tested against its own cutoff r_i + r_j + skin + reach).
+//   pair is tested against its own cutoff r_i + r_j + skin + reach). The search is a half
+//   stencil: a particle tests the rest of its own cell and the 13 cells ahead of it, so each
+//   pair (under each periodic image) is found once, whatever the particles' order.
 // - Each pair is stored once, in the row of the particle with the LOWER index (i < j): every
 //   pair of particle q lies in rows up to q's own, so the force loop can finish q (sum its
 //   forces, kick, drift) as soon as its own row is done, whatever the particles' ids. The
