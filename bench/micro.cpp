@@ -14,6 +14,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -159,12 +160,23 @@ void BM_NeighborBuildWithHistory(benchmark::State& st) {
   st.counters["lost_contacts"] = double(s->nl.stats.lost_contacts);
 }
 
-/// Whole steps of a case file (default: the chute, build/bench/chute.toml, made by
-/// bench/peer_compare.py or bench/lammps_data_to_case.py; override with COHDEM_BENCH_CASE).
-/// Skipped when the file is not there. Arg: threads.
+/// The case file of the case benchmarks: COHDEM_BENCH_CASE, else the chute as
+/// bench/lammps_data_to_case.py writes it to build/bench/chute.toml, else as
+/// bench/peer_compare.py leaves it in build/bench/peers/chute.toml.
+std::string bench_case() {
+  if (const char* env = std::getenv("COHDEM_BENCH_CASE")) return env;
+  for (const char* path : {"build/bench/chute.toml", "build/bench/peers/chute.toml"})
+    if (std::FILE* f = std::fopen(path, "r")) {
+      std::fclose(f);
+      return path;
+    }
+  return "build/bench/chute.toml";  // missing: the benchmark reports it and is skipped
+}
+
+/// Whole steps of a case file (bench_case(): by default the chute). Skipped when the file is
+/// not there. Arg: threads.
 void BM_CaseStep(benchmark::State& st) {
-  const char* env = std::getenv("COHDEM_BENCH_CASE");
-  const std::string path = env ? env : "build/bench/chute.toml";
+  const std::string path = bench_case();
   std::unique_ptr<System> s;
   try {
     const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
@@ -180,13 +192,12 @@ void BM_CaseStep(benchmark::State& st) {
   st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
 }
 
-/// The neighbor build of a case in mid-run (default: the chute, as BM_CaseStep): the case is
+/// The neighbor build of a case in mid-run (bench_case(), as BM_CaseStep): the case is
 /// run for COHDEM_BENCH_WARM steps (default 300), so that its particles have left the cell
 /// order of the last re-sort as they do between re-sorts, then the lists are rebuilt from that
 /// state (no re-sort; the live contacts' history carried over each time). Arg: threads.
 void BM_CaseNeighborBuild(benchmark::State& st) {
-  const char* env = std::getenv("COHDEM_BENCH_CASE");
-  const std::string path = env ? env : "build/bench/chute.toml";
+  const std::string path = bench_case();
   const char* warm = std::getenv("COHDEM_BENCH_WARM");
   std::unique_ptr<System> s;
   try {
