@@ -266,13 +266,23 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       key.swap(tl_key_[ch]);
       image.swap(tl_img_[ch]);
     }
-    // Rows: counted, then filled in the order the pairs were found (chunk after chunk).
+    // Rows: counted, then filled in the order the pairs were found (chunk after chunk). The
+    // same pass counts the transposed rows and finds each particle's lowest row (dep_lo).
     start.assign(n + 1, 0);
+    rstart.assign(n + 1, 0);
+    dep_lo.resize(n);
+    for (size_t i = 0; i < n; ++i) dep_lo[i] = uint32_t(i);
     for (int t = 0; t < chunks; ++t) {
       const uint64_t* const ks = tl_key_[t].data();
-      for (size_t e = 0, m = tl_cnt_[size_t(t)]; e < m; ++e) ++start[(ks[e] >> 32) + 1];
+      for (size_t e = 0, m = tl_cnt_[size_t(t)]; e < m; ++e) {
+        const uint32_t i = uint32_t(ks[e] >> 32), j = uint32_t(ks[e]);
+        ++start[i + 1];
+        ++rstart[j + 1];
+        dep_lo[j] = std::min(dep_lo[j], i);
+      }
     }
     for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
     np = start[n];
     reserve_headroom(jdx, np);
     reserve_headroom(image, np);
@@ -290,21 +300,11 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     }
   }
 
-  // Transposed slots, dependency ranges of the force kernel, zeroed receive buffers.
-  rstart.assign(n + 1, 0);
-  for (uint32_t j : jdx) ++rstart[j + 1];
-  for (size_t i = 0; i < n; ++i) rstart[i + 1] += rstart[i];
+  // Transposed slots (counted with the rows above), in ascending list order per particle.
   reserve_headroom(rpair, np);
   rpair.resize(np);
-  dep_lo.resize(n);
   fill_.assign(rstart.begin(), rstart.end() - 1);
-  for (size_t i = 0; i < n; ++i) dep_lo[i] = uint32_t(i);
-  for (size_t i = 0; i < n; ++i)
-    for (uint32_t k = start[i]; k < start[i + 1]; ++k) {
-      const uint32_t j = jdx[k];
-      rpair[fill_[j]++] = k;
-      dep_lo[j] = std::min(dep_lo[j], uint32_t(i));  // rows ascend, and i < j
-    }
+  for (uint32_t k = 0; k < uint32_t(np); ++k) rpair[fill_[jdx[k]]++] = k;
 
   // 5. Wall candidates. Bounded walls are tested with their bounds widened by the largest
   //    cutoff, so an approaching particle is listed before it reaches an edge.
