@@ -188,6 +188,8 @@ class NeighborList {
   std::vector<std::vector<uint64_t>> tl_key_;  // per-chunk pairs found, (lower << 32) | higher
   std::vector<std::vector<uint8_t>> tl_img_;   // their images, seen from the lower
   std::vector<size_t> tl_cnt_;                 // their counts (the buffers keep their length)
+  std::vector<std::array<uint32_t, 4>> tl_rng_;  // their lowest and highest rows and partners
+  std::vector<uint64_t> part_;                 // per thread range: its rows' and transposed rows' entries
   // The previous lists during a build (swapped, not copied) and the ids of their rows.
   std::vector<uint64_t> ids_, old_ids_;
   std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, new_of_id_;
