@@ -295,7 +295,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     x_ref_.resize(n);  // the reference state for the rebuild trigger (step 7), copied by range
     r_ref_.resize(n);
     const int rows_threads = nthreads > 1 && n > 0 ? nthreads : 1;
-    part_.assign(2 * size_t(rows_threads) + 2, 0);
+    part_.assign(2 * size_t(rows_threads), 0);
 #pragma omp parallel num_threads(rows_threads) if (rows_threads > 1)
     {
       const size_t nt = size_t(omp_get_num_threads()), t = size_t(omp_get_thread_num());
@@ -321,11 +321,11 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       }
       uint32_t sum = 0, rsum = 0;
       for (uint32_t i = lo; i < hi; ++i) { sum += st[i]; st[i] = sum; rsum += rs[i]; rs[i] = rsum; }
-      part_[2 * t + 2] = sum;
-      part_[2 * t + 3] = rsum;
+      part_[2 * t] = sum;
+      part_[2 * t + 1] = rsum;
 #pragma omp barrier
       uint32_t off = 0, roff = 0;  // the entries of the ranges before this one
-      for (size_t u = 0; u < t; ++u) { off += uint32_t(part_[2 * u + 2]); roff += uint32_t(part_[2 * u + 3]); }
+      for (size_t u = 0; u < t; ++u) { off += uint32_t(part_[2 * u]); roff += uint32_t(part_[2 * u + 1]); }
       for (uint32_t i = lo; i < hi; ++i) {
         st[i] += off;
         rs[i] += roff;
@@ -333,7 +333,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
 #pragma omp single
       {
         uint64_t total = 0;
-        for (size_t u = 0; u < nt; ++u) total += part_[2 * u + 2];
+        for (size_t u = 0; u < nt; ++u) total += part_[2 * u];
         np = size_t(total);
         reserve_headroom(jdx, np);
         reserve_headroom(image, np);

@@ -73,8 +73,8 @@ void check(bool periodic, bool resort) {
 }
 
 // Every image: in a periodic direction only 1.2 to 4.5 cutoffs long, one or two cells wide
-// (the full stencil, which visits a cell under each of its images) or three and four (the
-// half stencil, each pair of cells searched once, from the cell behind). A pair of particles
+// (a cell's neighbours at -1 and +1 are then one cell under two images, each searched once)
+// or three and four (each pair of cells searched once, from the cell behind). A pair of particles
 // may then lie within the cutoff under two images (1.2 cutoffs: at d and L - d), and is
 // listed once per image. One particle in ten is frozen: pairs of two fixed bodies are not
 // listed. Compared as multisets of (lower id, higher id, distance to 1e-12 m) against all
