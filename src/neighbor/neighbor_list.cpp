@@ -432,14 +432,19 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   uint64_t old_wlive = 0;
   for (uint8_t l : old_wlive_) old_wlive += l;
   if (old_live + old_wlive > 0) {
+    // The particles as they were at the last build, in the same order (no re-sort, insertion
+    // or removal since): every old index is its particle's new index, and no lookup is made
+    // (the case of most builds: a re-sort comes every sort_every builds).
+    const bool same = old_n == n && std::equal(old_ids_.begin(), old_ids_.end(), id);
     uint64_t max_id = 0;
-    for (size_t i = 0; i < n; ++i) max_id = std::max(max_id, id[i]);
-    const bool dense = max_id < 8 * uint64_t(old_n + n) + 1024;
+    if (!same)
+      for (size_t i = 0; i < n; ++i) max_id = std::max(max_id, id[i]);
+    const bool dense = !same && max_id < 8 * uint64_t(old_n + n) + 1024;
     std::vector<std::pair<uint64_t, uint32_t>> sorted;  // only for sparse ids
     if (dense) {
       if (new_of_id_.size() < max_id + 1) new_of_id_.resize(max_id + 1, UINT32_MAX);
       for (size_t i = 0; i < n; ++i) new_of_id_[id[i]] = uint32_t(i);
-    } else {
+    } else if (!same) {
       sorted.reserve(n);
       for (size_t i = 0; i < n; ++i) sorted.push_back({id[i], uint32_t(i)});
       std::sort(sorted.begin(), sorted.end());
@@ -454,11 +459,11 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     const size_t hs = hist.stride, ws = whist.stride;
 #pragma omp parallel for reduction(+ : found, wfound, flipped) schedule(static) if (long(old_n) > parallel_min)
     for (size_t io = 0; io < old_n; ++io) {
-      const uint32_t a = new_index(old_ids_[io]);
+      const uint32_t a = same ? uint32_t(io) : new_index(old_ids_[io]);
       if (a == UINT32_MAX) continue;
       for (uint32_t kk = old_start_[io]; kk < old_start_[io + 1]; ++kk) {
         if (!old_live_[kk]) continue;
-        const uint32_t b = new_index(old_ids_[old_jdx_[kk]]);
+        const uint32_t b = same ? old_jdx_[kk] : new_index(old_ids_[old_jdx_[kk]]);
         if (b == UINT32_MAX) continue;
         const bool swapped = b < a;  // now in the row of the old partner: seen from it
         const uint32_t row = swapped ? b : a, other = swapped ? a : b;
