@@ -33,21 +33,46 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   old_wlive_.swap(whist.live);
   old_ids_.swap(ids_);
 
-  // 1. Wrap periodic coordinates (only here, so stored image codes stay valid between builds).
-  for (int d = 0; d < 3; ++d) {
-    if (!dom.periodic[d]) continue;
+  // 1. One pass over the particles, on all threads (minimum, maximum, sum and "or" are exact
+  //    reductions: the same on any number of threads): periodic coordinates wrapped (only
+  //    here, so stored image codes stay valid between builds), the bounds of the others, the
+  //    largest radius, whether the particles share one species, how many are attached.
+  const bool per[3] = {dom.periodic[0], dom.periodic[1], dom.periodic[2]};
+  const Vec3 dlo = dom.lo, dhi = dom.hi;
+  double lx = INFINITY, ly = INFINITY, lz = INFINITY, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY, rmax = 0;
+  size_t n_att = 0;
+  bool mixed = false;
+  {
+    Vec3* const px = p.x.data();
+    const double* const pr = p.radius.data();
+    const int* const ps = p.species.data();
+    const uint8_t* const pf = p.flag.data();
+    const int s0 = n > 0 ? ps[0] : -1;
+#pragma omp parallel for schedule(static) if (long(n) > parallel_min) reduction(min : lx, ly, lz) \
+    reduction(max : hx, hy, hz, rmax) reduction(+ : n_att) reduction(|| : mixed)
     for (size_t i = 0; i < n; ++i) {
-      double& c = p.x[i][d];
-      if (c < dom.lo[d] || c >= dom.hi[d]) c -= L[d] * std::floor((c - dom.lo[d]) / L[d]);
-      if (c >= dom.hi[d]) c = dom.lo[d];  // round-off guard
+      Vec3 x = px[i];
+      bool wrapped = false;
+      for (int d = 0; d < 3; ++d) {
+        double& c = x[d];
+        if (!per[d] || (c >= dlo[d] && c < dhi[d])) continue;
+        c -= L[d] * std::floor((c - dlo[d]) / L[d]);
+        if (c >= dhi[d]) c = dlo[d];  // round-off guard
+        wrapped = true;
+      }
+      if (wrapped) px[i] = x;  // stored only where wrapped (a store would take the line from the core that holds it)
+      lx = std::min(lx, x.x); ly = std::min(ly, x.y); lz = std::min(lz, x.z);
+      hx = std::max(hx, x.x); hy = std::max(hy, x.y); hz = std::max(hz, x.z);
+      rmax = std::max(rmax, pr[i]);
+      mixed = mixed || ps[i] != s0;
+      n_att += pf[i] == kAttached;
     }
   }
 
   // 2. Grid.
-  double rmax = 0;
-  for (double r : p.radius) rmax = std::max(rmax, r);
   const double cutoff = 2 * rmax + skin + reach;
   Vec3 lo = dom.lo, hi = dom.hi;
+  const Vec3 xmin{lx, ly, lz}, xmax{hx, hy, hz};
   for (int d = 0; d < 3; ++d) {
     if (dom.periodic[d]) {
       if (L[d] <= cutoff)
@@ -55,8 +80,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
                        " must exceed the interaction cutoff " + std::to_string(cutoff) + " m");
       continue;
     }
-    lo[d] = INFINITY; hi[d] = -INFINITY;
-    for (size_t i = 0; i < n; ++i) { lo[d] = std::min(lo[d], p.x[i][d]); hi[d] = std::max(hi[d], p.x[i][d]); }
+    lo[d] = xmin[d];
+    hi[d] = xmax[d];
     if (n == 0) { lo[d] = 0; hi[d] = 1; }
     hi[d] += 1e-9 * (1 + std::fabs(hi[d]));
   }
@@ -99,11 +124,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     p.permute(cell_list_);
     bin();
   }
-  one_species = n > 0 ? p.species[0] : -1;
-  for (size_t i = 1; i < n && one_species >= 0; ++i)
-    if (p.species[i] != one_species) one_species = -1;
-  attached.clear();
-  for (size_t i = 0; i < n; ++i)
+  one_species = n > 0 && !mixed ? p.species[0] : -1;
+  attached.clear();  // ascending (after the re-sort)
+  for (size_t i = 0; i < n && attached.size() < n_att; ++i)
     if (p.flag[i] == kAttached) attached.push_back(uint32_t(i));
 
   for (int sx = -1; sx <= 1; ++sx)
@@ -385,7 +408,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   wstart.resize(n + 1);
   wstart[0] = 0;
   wall.clear();
-  for (size_t i = 0; i < n; ++i) {
+  if (wide_.empty()) std::fill(wstart.begin(), wstart.end(), 0u);
+  for (size_t i = 0; i < n && !wide_.empty(); ++i) {
     if (flag[i] == kFree)
       for (size_t w = 0; w < wide_.size(); ++w) {
         Vec3 nn;
@@ -427,10 +451,15 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       std::memset(hl + k0, 0, k1 - k0);
     }
   }
-  uint64_t old_live = 0;
-  for (uint8_t l : old_live_) old_live += l;
-  uint64_t old_wlive = 0;
-  for (uint8_t l : old_wlive_) old_wlive += l;
+  // The old live flags are 0 or 1: summed in 32-bit lanes (a list holds fewer than 2^32 entries).
+  auto count_live = [](const std::vector<uint8_t>& f) {
+    uint32_t c = 0;
+    const uint8_t* const q = f.data();
+#pragma omp simd reduction(+ : c)
+    for (size_t k = 0; k < f.size(); ++k) c += q[k];
+    return uint64_t(c);
+  };
+  const uint64_t old_live = count_live(old_live_), old_wlive = count_live(old_wlive_);
   if (old_live + old_wlive > 0) {
     // The particles as they were at the last build, in the same order (no re-sort, insertion
     // or removal since): every old index is its particle's new index, and no lookup is made
