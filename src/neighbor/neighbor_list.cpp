@@ -52,15 +52,19 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     reduction(max : hx, hy, hz, rmax) reduction(+ : n_att) reduction(|| : mixed)
     for (size_t i = 0; i < n; ++i) {
       Vec3 x = px[i];
-      bool wrapped = false;
-      for (int d = 0; d < 3; ++d) {
-        double& c = x[d];
-        if (!per[d] || (c >= dlo[d] && c < dhi[d])) continue;
-        c -= L[d] * std::floor((c - dlo[d]) / L[d]);
-        if (c >= dhi[d]) c = dlo[d];  // round-off guard
-        wrapped = true;
+      // Out of the periodic box along d (rare): wrapped, and stored (a store of every particle
+      // would take its line from the core that holds it).
+      const bool out = (per[0] && (x.x < dlo.x || x.x >= dhi.x)) || (per[1] && (x.y < dlo.y || x.y >= dhi.y)) ||
+                       (per[2] && (x.z < dlo.z || x.z >= dhi.z));
+      if (out) [[unlikely]] {
+        for (int d = 0; d < 3; ++d) {
+          double& c = x[d];
+          if (!per[d] || (c >= dlo[d] && c < dhi[d])) continue;
+          c -= L[d] * std::floor((c - dlo[d]) / L[d]);
+          if (c >= dhi[d]) c = dlo[d];  // round-off guard
+        }
+        px[i] = x;
       }
-      if (wrapped) px[i] = x;  // stored only where wrapped (a store would take the line from the core that holds it)
       lx = std::min(lx, x.x); ly = std::min(ly, x.y); lz = std::min(lz, x.z);
       hx = std::max(hx, x.x); hy = std::max(hy, x.y); hz = std::max(hz, x.z);
       rmax = std::max(rmax, pr[i]);
