@@ -52,8 +52,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     reduction(max : hx, hy, hz, rmax) reduction(+ : n_att) reduction(|| : mixed)
     for (size_t i = 0; i < n; ++i) {
       Vec3 x = px[i];
-      // Out of the periodic box along d (rare): wrapped, and stored (a store of every particle
-      // would take its line from the core that holds it).
+      // Outside the box in a periodic direction (rare): wrapped, and stored (a store of every
+      // particle would take its line from the core that holds it).
       const bool out = (per[0] && (x.x < dlo.x || x.x >= dhi.x)) || (per[1] && (x.y < dlo.y || x.y >= dhi.y)) ||
                        (per[2] && (x.z < dlo.z || x.z >= dhi.z));
       if (out) [[unlikely]] {
