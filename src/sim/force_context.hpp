@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <omp.h>
@@ -64,6 +65,30 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, lo
 /// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
 /// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
 /// results bit-identical; it only moves where the threads meet.
+/// An allocator that leaves the elements a resize adds uninitialised (trivial types only
+/// here): a list made as long as it can get, filled through a pointer, then cut to its
+/// length, is not zero-filled first.
+template <class T>
+struct NoFillAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoFillAllocator<U>;
+  };
+  NoFillAllocator() = default;
+  template <class U>
+  NoFillAllocator(const NoFillAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... A>
+  void construct(U* p, A&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<A>(args)...);
+  }
+};
+/// A thread's particles left for another thread or for after the barrier (force loop).
+using DeferList = std::vector<uint32_t, NoFillAllocator<uint32_t>>;
+
 struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
   /// Work of a particle, in units of one screened list entry: the particle's own share
@@ -80,7 +105,7 @@ struct PairSlots {
   uint32_t count = 0;        ///< slots in use
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
-  std::vector<std::vector<uint32_t>> deferred;
+  std::vector<DeferList> deferred;
   /// What the split and the map were made for: the list build, thread and particle counts.
   uint64_t builds = ~uint64_t(0);
   long threads = 0, n = 0;
@@ -140,7 +165,7 @@ struct PairSlots {
   /// Thread t's hand-off of its block's particles that depend on block t - 1 (the list is
   /// complete: none is added to it after this call, so its buffer stays where it is). Out of
   /// line: once per call and thread.
-  [[gnu::noinline]] void hand_over(long t, const std::vector<uint32_t>& list, uint32_t call) {
+  [[gnu::noinline]] void hand_over(long t, const DeferList& list, uint32_t call) {
     HandOff& H = hand[size_t(t)];
     H.list = list.data();
     H.count = list.size();

@@ -6,8 +6,7 @@
 # of the optimized binary and fails on any call into cohdem's own code other than the wall
 # geometry (rare entries), the wall contacts of a particle (ContactModelImpl::wall_contacts,
 # kept out of line on purpose: only particles with wall entries call it), the thread
-# split's set-up (PairSlots, once per list build), the list of particles a thread leaves for
-# after the barrier (defer_range, several threads only), the AVX2 screening of a batch
+# split's set-up (PairSlots, once per list build), the AVX2 screening of a batch
 # (screen_avx2: compiled for AVX2 alone, so it cannot be inlined into the portable kernel),
 # the contacts of the laws with lanes (linear_, hertz_, mepa_lanes_avx2 and their _epsd_
 # forms: one call per 16 contacts, AVX2 alone for the same reason) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
@@ -31,7 +30,7 @@ objdump -d --no-show-raw-insn -C "$bin" | awk '
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::defer_range\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/) next
     bad[t]++
   }
   END {
