@@ -48,23 +48,6 @@ COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, lo
   return long(dep_lo[q]) >= a && long(q) < b;
 }
 
-/// How the force loop on several threads splits the particles, and where it keeps the results
-/// it stores for the gather. The blocks are contiguous ranges of particles of about equal
-/// work (plan()), not of equal count: the rows differ in length and contacts (a chute's base
-/// and dense bottom layers against its dilute top). Only pairs whose j is not local to the
-/// sweeping thread's block (near a block boundary) are stored, each in its own slot of a
-/// compact buffer, so the buffer holds those pairs rather than the whole list (48 bytes per
-/// stored pair instead of per list entry). Split and map are redone when the list, the
-/// thread count or the shares (below) change. Also holds, per thread, the particles left for after the kernel's
-/// barrier (with or without recording).
-///
-/// The work model is rough (its weights are costs on one machine and one problem; wall
-/// contacts are not in it, and a core shared with other work is slower), so the split is
-/// corrected by measurement: the kernel times each thread's sweep of its block (measured()),
-/// and every kRebalanceCalls calls the blocks' shares of the modelled work are set so that
-/// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
-/// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
-/// results bit-identical; it only moves where the threads meet.
 /// An allocator that leaves the elements a resize adds uninitialised (trivial types only
 /// here): a list made as long as it can get, filled through a pointer, then cut to its
 /// length, is not zero-filled first.
@@ -89,6 +72,23 @@ struct NoFillAllocator : std::allocator<T> {
 /// A thread's particles left for another thread or for after the barrier (force loop).
 using DeferList = std::vector<uint32_t, NoFillAllocator<uint32_t>>;
 
+/// How the force loop on several threads splits the particles, and where it keeps the results
+/// it stores for the gather. The blocks are contiguous ranges of particles of about equal
+/// work (plan()), not of equal count: the rows differ in length and contacts (a chute's base
+/// and dense bottom layers against its dilute top). Only pairs whose j is not local to the
+/// sweeping thread's block (near a block boundary) are stored, each in its own slot of a
+/// compact buffer, so the buffer holds those pairs rather than the whole list (48 bytes per
+/// stored pair instead of per list entry). Split and map are redone when the list, the
+/// thread count or the shares (below) change. Also holds, per thread, the particles left for after the kernel's
+/// barrier (with or without recording).
+///
+/// The work model is rough (its weights are costs on one machine and one problem; wall
+/// contacts are not in it, and a core shared with other work is slower), so the split is
+/// corrected by measurement: the kernel times each thread's sweep of its block (measured()),
+/// and every kRebalanceCalls calls the blocks' shares of the modelled work are set so that
+/// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
+/// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
+/// results bit-identical; it only moves where the threads meet.
 struct PairSlots {
   static constexpr uint32_t kNone = ~uint32_t(0);
   /// Work of a particle, in units of one screened list entry: the particle's own share

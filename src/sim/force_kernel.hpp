@@ -399,15 +399,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // shared out in equal parts after the barrier; finish() is told the block that owns the
     // particle (its locality test is the owner's), so what is summed, and in which order, is
     // the same whichever thread finishes it. Without one, each thread finishes its own.
-    // The thread's list is filled through a vector object of its own, and handed to the
-    // PairSlots (which keeps its capacity from call to call) before the barrier: the
-    // PairSlots' vector headers share cache lines, which every push_back through them
-    // bounced between the cores.
-    // The list is made as long as the particles the sweep can defer (those of the block's
-    // head, head_end - a at most; not zero-filled: DeferList) and cut to its length once
-    // complete: a particle is appended through a pointer, with no capacity test and no call
-    // (a push_back out of line took about 39 instructions a particle, 2 per particle-step of
-    // the 10^4 gas on two threads).
+    // The thread's list is a vector object of its own, handed to the PairSlots (which keeps
+    // its capacity from call to call) before the barrier: the PairSlots' vector headers share
+    // cache lines, which every growth through them bounced between the cores. It is made as
+    // long as the particles the sweep can defer (those of the block's head, head_end - a at
+    // most; not zero-filled: DeferList) and cut to its length once complete: a particle is
+    // appended through a pointer, with no capacity test and no call (a push_back out of line
+    // took about 39 instructions a particle, 2 per particle-step of the 10^4 gas on two
+    // threads).
     DeferList own;
     if (share) own.swap(c.slots->deferred[size_t(tid)]);
     if (nt > 1 && own.size() < size_t(head_end - a)) own.resize(size_t(head_end - a));
