@@ -1,9 +1,12 @@
-// A probe of the machine, not of cohdem: how long data stays in this core's caches while the
-// core does something else. It explains a cost seen in whole runs (docs/performance.md,
-// twenty-fourth round): the force calls right after a neighbor-list build run slower, and
-// so do those after a pause of the same length that touches no memory at all.
+// Probes of the machine, not of cohdem. They explain costs seen in whole runs
+// (docs/performance.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
+// machine before a benchmark session.
 //
-//   ./build/cohdem_bench --benchmark_filter=CacheAfterPause
+//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|OmpSync'
+//
+// How long data stays in this core's caches while the core does something else: the force
+// calls right after a neighbor-list build run slower, and so do those after a pause of the
+// same length that touches no memory at all.
 //
 // BM_CacheAfterPause/<KiB>/<pause us>: a buffer of KiB kibibytes, one 8-byte word per 64-byte
 // line linked into a single random cycle, is walked once (every line, each load depending on
@@ -12,11 +15,28 @@
 // warm as the caches allow; where a pause of a few milliseconds doubles the walk, the lines
 // were evicted during the pause by something other than this process (on a shared host: the
 // other tenants of the L3, or the host running other work on this core).
+//
+// BM_CoreToCore: one cache line passed back and forth between two threads pinned to two
+// different CPUs (the first two this process may run on), each waiting for the other's
+// store before making its own; the time per round trip is twice the latency of moving a
+// written line from one core to the other. Every handing of data between threads pays it:
+// OpenMP's fork, join and barriers, and any line that one thread writes and the other reads
+// (in the force loop, the particles at a block boundary).
+//
+// BM_OmpSync/threads:2/kind:<0|1>: what OpenMP's synchronisation costs on two threads, per
+// operation: kind 0 an empty parallel region (fork and join, what the force loop pays once
+// per call), kind 1 a barrier inside one region (what a team kept across steps would pay
+// instead).
 #include <benchmark/benchmark.h>
+#include <omp.h>
+#include <pthread.h>
+#include <sched.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <random>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -54,6 +74,99 @@ void BM_CacheAfterPause(benchmark::State& st) {
 BENCHMARK(BM_CacheAfterPause)
     ->ArgsProduct({{1024, 4096}, {0, 250, 1000, 4000}})
     ->ArgNames({"KiB", "pause_us"})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+/// The first two CPUs this process may run on, or -1 where it has fewer than two.
+std::pair<int, int> two_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return {-1, -1};
+  int found[2] = {-1, -1}, k = 0;
+  for (int c = 0; c < CPU_SETSIZE && k < 2; ++c)
+    if (CPU_ISSET(c, &set)) found[k++] = c;
+  return {found[0], found[1]};
+}
+
+bool pin_to(const int cpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  return pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
+}
+
+void BM_CoreToCore(benchmark::State& st) {
+  const auto [c0, c1] = two_cpus();
+  if (c1 < 0) {
+    st.SkipWithError("needs two CPUs");
+    return;
+  }
+  // Two lines, each written by one thread only: the ping and the pong.
+  struct alignas(64) Line { std::atomic<uint64_t> v{0}; };
+  static Line ping, pong;
+  ping.v.store(0);
+  pong.v.store(0);
+  std::atomic<bool> stop{false};
+  std::thread other([&, c1 = c1] {
+    pin_to(c1);
+    uint64_t seen = 0;
+    while (true) {
+      const uint64_t p = ping.v.load(std::memory_order_acquire);
+      if (p != seen) {
+        seen = p;
+        pong.v.store(p, std::memory_order_release);
+      } else if (stop.load(std::memory_order_relaxed)) {
+        break;
+      }
+    }
+  });
+  cpu_set_t before;
+  pthread_getaffinity_np(pthread_self(), sizeof before, &before);
+  pin_to(c0);
+  uint64_t i = 0;
+  constexpr int kTrips = 1000;
+  for (auto _ : st) {
+    for (int r = 0; r < kTrips; ++r) {
+      ping.v.store(++i, std::memory_order_release);
+      while (pong.v.load(std::memory_order_acquire) != i) {
+      }
+    }
+  }
+  stop.store(true);
+  ping.v.store(++i, std::memory_order_release);
+  other.join();
+  pthread_setaffinity_np(pthread_self(), sizeof before, &before);
+  st.counters["time_per_round_trip"] = benchmark::Counter(double(st.iterations()) * kTrips,
+                                                        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  st.SetLabel("CPUs " + std::to_string(c0) + " and " + std::to_string(c1));
+}
+
+BENCHMARK(BM_CoreToCore)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+void BM_OmpSync(benchmark::State& st) {
+  const int nt = int(st.range(0));
+  const bool barrier = st.range(1) == 1;
+  constexpr int kOps = 1000;
+  for (auto _ : st) {
+    if (barrier) {
+#pragma omp parallel num_threads(nt)
+      for (int r = 0; r < kOps; ++r) {
+#pragma omp barrier
+      }
+    } else {
+      for (int r = 0; r < kOps; ++r) {
+#pragma omp parallel num_threads(nt)
+        benchmark::ClobberMemory();
+      }
+    }
+  }
+  st.counters["time_per_op"] =
+      benchmark::Counter(double(st.iterations()) * kOps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+BENCHMARK(BM_OmpSync)
+    ->ArgsProduct({{2}, {0, 1}})
+    ->ArgNames({"threads", "kind"})
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 
