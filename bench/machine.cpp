@@ -36,7 +36,9 @@
 #include <chrono>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -132,8 +134,7 @@ void BM_CoreToCore(benchmark::State& st) {
       }
     }
   }
-  stop.store(true);
-  ping.v.store(++i, std::memory_order_release);
+  stop.store(true);  // seen by the other thread once it has answered the last ping
   other.join();
   pthread_setaffinity_np(pthread_self(), sizeof before, &before);
   st.counters["time_per_round_trip"] = benchmark::Counter(double(st.iterations()) * kTrips,
