@@ -19,7 +19,9 @@ For every code and problem: particle-steps per second (atoms x steps / loop time
 its summary.json, which times the step loop only, as LAMMPS's "Loop time" does), median and
 best of the runs, the ratio cohdem/peer, and the physics after the same simulated time:
 translational kinetic energy and mean flow velocity of the free particles (x for the chute,
-z for the packing). Results also go to OUT/results.json. Python 3 standard library only.
+z for the packing), and the memory: each run's peak resident memory (the process's high-water
+mark, the same measure for every code) over the particle count, median of the runs (column
+B/particle). Results also go to OUT/results.json. Python 3 standard library only.
 
 Pinning (one thread and one rank, the default): every run of round r is pinned to the same
 core, core r mod (cores this process may use), so that within a round every code runs on the
@@ -44,15 +46,20 @@ REPO = os.path.dirname(HERE)
 
 
 def sh(cmd, cwd, log, cpu=None):
-    """Runs cmd (list), output to log; returns the output text. Raises on failure. cpu: the
-    core the run is pinned to (None: not pinned)."""
+    """Runs cmd (list), output to log; returns the output text and the run's peak resident
+    memory in bytes. Raises on failure. cpu: the core the run is pinned to (None: not
+    pinned). The memory is the kernel's high-water mark of the process (os.wait4's
+    ru_maxrss), the same measure for every code: binary, libraries, input and all; for an
+    MPI run it is the largest process (mpirun or a rank)."""
     pin = None if cpu is None else (lambda: os.sched_setaffinity(0, {cpu}))
     with open(log, "w") as f:
-        r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin)
+        proc = subprocess.Popen(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin)
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
     text = open(log).read()
-    if r.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}); see {log}:\n{text[-2000:]}")
-    return text
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}); see {log}:\n{text[-2000:]}")
+    return text, usage.ru_maxrss * 1024  # KiB on Linux
 
 
 def peer_loop(text):
@@ -205,13 +212,18 @@ def main():
                 log = os.path.join(work, f"{pname}.{c}.{run}.log")
                 if c == "cohdem":
                     out = os.path.join(work, f"{pname}.cohdem.out")
-                    sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log, cpu)
+                    _, rss = sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log, cpu)
                     j = cohdem_summary(out, nsteps)
                     r = (j["particle_steps_per_s"], j["translational_energy"], j["rotational_energy"],
                          j["mean_velocity"][P.vel_axis])
+                    atoms = j["particles"]
                 else:
-                    r = parse_peer(sh(mpi + P.command(c, nsteps), work, log, cpu), nsteps)
+                    text, rss = sh(mpi + P.command(c, nsteps), work, log, cpu)
+                    r = parse_peer(text, nsteps)
+                    atoms = peer_loop(text)[2]
                 res[c]["rate"].append(r[0])
+                res[c].setdefault("peak_rss_bytes", []).append(rss)
+                res[c]["particles"] = atoms
                 res[c].setdefault("cpu", []).append(cpu)
                 res[c]["ke"], res[c]["ke_rot"], res[c]["v"] = r[1], r[2], r[3]
                 where = f" (core {cpu})" if cpu is not None else ""
@@ -220,12 +232,14 @@ def main():
         # paired: the median over the rounds of cohdem's rate over the peer's in the same round
         # (the same core, minutes apart at most).
         print(f"\n  {'code':9s} {'median':>10s} {'best':>10s}  {'cohdem/peer (median, best, paired)':>35s}  "
-              f"{'KE_trans':>12s} {'KE_rot':>10s} {'v_' + ax:>10s}  physics")
+              f"{'B/particle':>10s}  {'KE_trans':>12s} {'KE_rot':>10s} {'v_' + ax:>10s}  physics")
         c0 = res["cohdem"]
         for c in codes:
             R = res[c]
             med, best = statistics.median(R["rate"]), max(R["rate"])
             R["median"], R["best"] = med, best
+            # Peak resident memory of the whole process over the particle count (median of the runs).
+            R["bytes_per_particle"] = statistics.median(R["peak_rss_bytes"]) / R["particles"]
             ratio = ""
             phys = ""
             if c != "cohdem":
@@ -239,8 +253,8 @@ def main():
                 ok = dke <= P.physics_tol and dv <= P.physics_tol
                 R["physics_ok"] = ok
                 phys = f"dKE {dke:.2e}, dv {dv:.2e}: {'ok' if ok else 'DIFFERS'} (tol {P.physics_tol:g})"
-            print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>35s}  {R['ke']:12.7g} {R['ke_rot']:10.5g} "
-                  f"{R['v']:10.6g}  {phys}")
+            print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>35s}  {R['bytes_per_particle']:10.0f}  "
+                  f"{R['ke']:12.7g} {R['ke_rot']:10.5g} {R['v']:10.6g}  {phys}")
         if P.note:
             print(f"  note: {P.note}")
         results[pname] = {"steps": nsteps, "runs": a.runs, "threads": a.threads, "mpi": a.mpi, "codes": res}

@@ -94,7 +94,9 @@ cores = sorted(os.sched_getaffinity(0))[:2]
 ok = ok and sorted(map(int, per)) == cores and all(math.isfinite(v) and v > 0 for v in per.values())
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
 # peer_compare.py's pinning without peers (cohdem alone, the chute, 2 rounds of 3 steps):
-# round r ran on core r mod (cores this process may use), recorded per run.
+# round r ran on core r mod (cores this process may use), recorded per run; each run's peak
+# resident memory recorded, and bytes per particle between 100 B (less than the particles'
+# own state) and 100 kB.
 if python3 "$src/bench/peer_compare.py" --peers "" --problems chute --runs 2 --steps 3 --cohdem "$bin" \
      --chute-data "$data" --out "$work/pc" > "$work/pc.log" 2>&1 &&
    python3 -c "
@@ -102,6 +104,7 @@ import json, os, sys
 r = json.load(open('$work/pc/results.json'))['results']['chute']['codes']['cohdem']
 cores = sorted(os.sched_getaffinity(0))
 ok = r['cpu'] == [cores[k % len(cores)] for k in range(2)] and len(r['rate']) == 2 and all(x > 0 for x in r['rate'])
-sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
+ok = ok and r['particles'] == 32000 and len(r['peak_rss_bytes']) == 2 and 100 < r['bytes_per_particle'] < 1e5
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning, memory"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
