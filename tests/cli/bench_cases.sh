@@ -105,6 +105,7 @@ r = json.load(open('$work/pc/results.json'))['results']['chute']['codes']['cohde
 cores = sorted(os.sched_getaffinity(0))
 ok = r['cpu'] == [cores[k % len(cores)] for k in range(2)] and len(r['rate']) == 2 and all(x > 0 for x in r['rate'])
 ok = ok and r['particles'] == 32000 and len(r['peak_rss_bytes']) == 2 and 100 < r['bytes_per_particle'] < 1e5
+ok = ok and 100 < r['run_bytes_per_particle'] <= r['bytes_per_particle']
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning, memory"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
