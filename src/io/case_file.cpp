@@ -1,9 +1,19 @@
 #include "io/case_file.hpp"
 
 #include <toml++/toml.h>
+// The CSV reader of the particle files (Debian's libfccp-dev), without its reading thread.
+// (Its error type copies file names with strncpy, which g++ 12 warns about once inlined.)
+#define CSV_IO_NO_THREAD
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wstringop-truncation"
+#include <libfccp/csv.h>
+#pragma GCC diagnostic pop
 
 #include <algorithm>
+#include <charconv>
+#include <cstring>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -151,6 +161,65 @@ Schedule read_schedule(Section& s, const std::string& key, double lo, double hi,
   }
   if (n && !n->is_number()) s.fail(key, std::string("expected a number (") + unit + ") or a schedule table { times, values, period }");
   return Schedule::constant(s.num(key, std::nullopt, lo, hi, false, unit));
+}
+
+/// A path named in a case file, relative to the case file's folder (to the working folder for
+/// an embedded case or case text).
+std::string beside_case(const std::string& case_file, const std::string& rel) {
+  const std::filesystem::path r(rel);
+  if (r.is_absolute() || case_file.empty() || case_file.front() == '<') return rel;
+  return (std::filesystem::path(case_file).parent_path() / r).string();
+}
+
+/// The particles of a [[particles]] file (see docs/case-file.md): a CSV file with a header
+/// naming its columns, x, y, z and radius required, vx, vy, vz, wx, wy, wz optional (zero),
+/// others ignored; '#' starts a comment line. libfccp splits the lines; the numbers are read
+/// with std::from_chars (correctly rounded, as the TOML parser reads them). Errors name the
+/// CSV file, its line and the column.
+void read_particle_file(const std::string& path, const Section& s, ExplicitParticle proto,
+                        std::vector<ExplicitParticle>& out) {
+  if (!std::ifstream(path)) s.fail("file", "cannot open particle file '" + path + "'");
+  static const char* const kCols[10] = {"x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz"};
+  const size_t first = out.size();
+  try {
+    io::CSVReader<10, io::trim_chars<' ', '\t'>, io::no_quote_escape<','>, io::throw_on_overflow,
+                  io::single_line_comment<'#'>>
+        in(path);
+    in.read_header(io::ignore_extra_column | io::ignore_missing_column, kCols[0], kCols[1], kCols[2], kCols[3],
+                   kCols[4], kCols[5], kCols[6], kCols[7], kCols[8], kCols[9]);
+    for (;;) {
+      char* col[10] = {};
+      if (!in.read_row(col[0], col[1], col[2], col[3], col[4], col[5], col[6], col[7], col[8], col[9])) break;
+      const int line = int(in.get_file_line());
+      double v[10] = {};
+      for (int k = 0; k < 10; ++k) {
+        if (col[k] == nullptr) {
+          if (k < 4)
+            throw InputError(path, 1, "", std::string("missing column '") + kCols[k] +
+                                              "' in the header (required: x, y, z, radius; optional: vx, vy, vz, wx, wy, wz)");
+          continue;
+        }
+        const char* b = col[k];
+        const char* e = b + std::strlen(b);
+        if (*b == '+') ++b;  // from_chars takes no leading '+'
+        const auto [end, ec] = std::from_chars(b, e, v[k]);
+        if (b == e || ec != std::errc() || end != e || !std::isfinite(v[k]))
+          throw InputError(path, line, "", std::string("column '") + kCols[k] + "': expected a finite number, got '" +
+                                               col[k] + "'");
+      }
+      if (!(v[3] > 0))
+        throw InputError(path, line, "", "column 'radius': expected a number > 0 m, got " + std::string(col[3]));
+      ExplicitParticle p = proto;
+      p.x = {v[0], v[1], v[2]};
+      p.radius = v[3];
+      p.v = {v[4], v[5], v[6]};
+      p.omega = {v[7], v[8], v[9]};
+      out.push_back(p);
+    }
+  } catch (const io::error::base& e) {  // the CSV's structure: its message names the file and line
+    throw InputError(path, 0, "", std::string("particle file: ") + e.what());
+  }
+  if (out.size() == first) s.fail("file", "particle file '" + path + "' has no particle rows");
 }
 
 int material_index(const Case& c, Section& s, const std::string& key) {
@@ -450,6 +519,16 @@ Case parse(toml::table& root, const std::string& file) {
     s.finish();
     c.particles.push_back(p);
   }
+  // [[particles]]: particles listed in CSV files.
+  for (Section s : top.tables("particles")) {
+    ExplicitParticle proto;
+    proto.material = material_index(c, s, "material");
+    if (!(c.materials[proto.material].density > 0)) s.fail("material", "particles need a material with density > 0");
+    proto.frozen = s.boolean("frozen", false);
+    const std::string path = beside_case(file, s.str("file", std::nullopt));
+    s.finish();
+    read_particle_file(path, s, proto, c.particles);
+  }
   if (auto rs = top.table("ring_shear")) {
     std::vector<std::string> names;
     std::vector<double> densities;
@@ -457,7 +536,7 @@ Case parse(toml::table& root, const std::string& file) {
     c.ring_shear = parse_ring_shear(*rs, names, densities);
   }
   if (c.inserts.empty() && c.particles.empty() && !c.ring_shear)
-    top.fail("insert", "the case has no particles: add an [[insert]] or [[particle]]");
+    top.fail("insert", "the case has no particles: add an [[insert]], [[particle]] or [[particles]]");
 
   // [[heat_source]]
   for (Section s : top.tables("heat_source")) {
@@ -513,7 +592,7 @@ Case parse(toml::table& root, const std::string& file) {
   for (const auto& p : c.output.probes)
     if (p.find("temperature") != std::string::npos && !c.thermal.enabled)
       throw InputError(file, 0, "output.probes", "probe '" + p + "' needs a [thermal] table");
-  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "output", "ring_shear", "thermal",
+  top.finish({"case", "simulation", "domain", "material", "contact", "wall", "insert", "particle", "particles", "output", "ring_shear", "thermal",
               "heat_source"});
 
   // Derived defaults.
