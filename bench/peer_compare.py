@@ -6,7 +6,8 @@
   python3 bench/peer_compare.py --runs 7 --steps 2000 --problems chute,chute_hmr
   python3 bench/peer_compare.py --threads 2 --mpi 2  # cohdem on 2 threads, peers on 2 ranks
 
-Problems (same initial state, same physics, same number of steps in every code):
+Problems (same initial state, same physics, same number of steps in every code; cohdem's
+cases read their particles from CSV files, [[particles]], as LAMMPS reads its data file):
   chute      LAMMPS's chute benchmark, 32,000 spheres, gran/hooke/history (in.chute);
              cohdem: bench/chute.toml; LIGGGHTS: hooke/stiffness + tangential history
   chute_hmr  the same chute with Hertz-Mindlin + rolling resistance (in.chute.granular
@@ -137,13 +138,14 @@ def prepare_inputs(work, problems, chute_data, packing_n):
         shutil.copy(chute_data, os.path.join(work, "data.chute"))
         for case in ("chute", "chute_hmr"):
             subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "data.chute"),
-                            os.path.join(HERE, case + ".toml"), "-o", os.path.join(work, case + ".toml")], check=True)
+                            os.path.join(HERE, case + ".toml"), "-o", os.path.join(work, case + ".toml"), "--csv"],
+                           check=True)
     if "packing" in problems:
         subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(packing_n),
                         os.path.join(work, "packing.data")], check=True, stdout=subprocess.DEVNULL)
         subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), os.path.join(work, "packing.data"),
                         os.path.join(HERE, "packing.toml"), "-o", os.path.join(work, "packing.toml"), "--frozen", "",
-                        "--box", "xy"], check=True)
+                        "--box", "xy", "--csv"], check=True)
 
 
 def problem_table():

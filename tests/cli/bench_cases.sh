@@ -40,6 +40,16 @@ done
 python3 "$src/bench/gen_packing.py" 2000 "$work/packing.data" > /dev/null &&
   python3 "$src/bench/lammps_data_to_case.py" "$work/packing.data" "$src/bench/packing.toml" -o "$work/packing.toml" \
     --frozen "" --box xy > /dev/null && check_case packing "$work/packing.toml" || { echo "FAIL packing input"; fail=$((fail+1)); }
+# --csv: the same packing with its particles in a CSV file ([[particles]], one group: the
+# same order) runs 3 steps to the same state, to the last digit of the energies.
+if python3 "$src/bench/lammps_data_to_case.py" "$work/packing.data" "$src/bench/packing.toml" -o "$work/packing_csv.toml" \
+     --frozen "" --box xy --csv > /dev/null && [ -f "$work/packing_csv.grain.csv" ] &&
+   "$bin" run "$work/packing_csv.toml" --set simulation.duration=3e-4 --out "$work/o_packing_csv" --quiet > /dev/null 2>&1 &&
+   python3 -c "
+import json, sys
+a, b = (json.load(open(f'$work/{o}/summary.json')) for o in ('o_packing', 'o_packing_csv'))
+keys = ('particles', 'steps', 'kinetic_energy', 'rotational_energy', 'contacts')
+sys.exit(0 if all(a[k] == b[k] for k in keys) else 1)"; then pass=$((pass+1)); echo "ok   packing --csv: the same state"; else echo "FAIL packing --csv"; fail=$((fail+1)); fi
 # model_cost.py end to end (one run of 3 steps per law): four rows with positive rates.
 if python3 "$src/bench/model_cost.py" --runs 1 --steps 3 --cohdem "$bin" --chute-data "$data" --out "$work/mc" > "$work/mc.log" 2>&1 &&
    python3 -c "
