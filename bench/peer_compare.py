@@ -265,8 +265,8 @@ def main():
                 phys = f"dKE {dke:.2e}, dv {dv:.2e}: {'ok' if ok else 'DIFFERS'} (tol {P.physics_tol:g})"
             print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>35s}  {R['bytes_per_particle']:10.0f}  "
                   f"{R['ke']:12.7g} {R['ke_rot']:10.5g} {R['v']:10.6g}  {phys}")
-        print(f"  memory: peak resident memory of the whole process over the particle count; cohdem's "
-              f"time loop alone {c0['run_bytes_per_particle']:.0f} B/particle (its peak is the case file's parse)")
+        print(f"  memory: peak resident memory of the whole process over the particle count (cohdem's "
+              f"time loop alone: {c0['run_bytes_per_particle']:.0f} B/particle)")
         if P.note:
             print(f"  note: {P.note}")
         results[pname] = {"steps": nsteps, "runs": a.runs, "threads": a.threads, "mpi": a.mpi, "codes": res}
