@@ -201,7 +201,7 @@ void read_particle_file(const std::string& path, const Section& s, ExplicitParti
         }
         const char* b = col[k];
         const char* e = b + std::strlen(b);
-        if (*b == '+') ++b;  // from_chars takes no leading '+'
+        if (*b == '+' && b + 1 < e && b[1] != '+' && b[1] != '-') ++b;  // from_chars takes no leading '+'
         const auto [end, ec] = std::from_chars(b, e, v[k]);
         if (b == e || ec != std::errc() || end != e || !std::isfinite(v[k]))
           throw InputError(path, line, "", std::string("column '") + kCols[k] + "': expected a finite number, got '" +

@@ -3,6 +3,7 @@
 // bit, as the same numbers written as [[particle]] tables (both are read correctly rounded);
 // and every malformed file must be an InputError naming the CSV file, its line and column.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -146,6 +147,8 @@ TEST(ParticleFile, MalformedFilesNameTheFileLineAndColumn) {
   m = error_of(d, "x,y,z,radius\n1,2,3,0\n", &line);
   EXPECT_NE(m.find("column 'radius': expected a number > 0 m"), std::string::npos) << m;
   EXPECT_EQ(line, 2);
+  m = error_of(d, "x,y,z,radius\n+-1,2,3,1\n");
+  EXPECT_NE(m.find("column 'x': expected a finite number, got '+-1'"), std::string::npos) << m;
   m = error_of(d, "x,y,z,radius\n1,2,3,1e999\n");
   EXPECT_NE(m.find("column 'radius': expected a finite number"), std::string::npos) << m;
   m = error_of(d, "x,y,z,radius\n1,2,3\n");
