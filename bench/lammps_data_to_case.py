@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Turns a LAMMPS data file (atom_style sphere or LIGGGHTS granular: id type diameter density
 x y z [ix iy iz], optional Velocities: id vx vy vz wx wy wz) into a cohdem case: the header
-case (everything but the particles) followed by one [[particle]] table per atom.
+case (everything but the particles) followed by one [[particle]] table per atom (with --csv:
+the particles in CSV files, read by [[particles]] tables).
 
   python3 bench/lammps_data_to_case.py DATA HEADER.toml -o CASE.toml [--types 1=flow,2=base]
       [--frozen 2] [--box xy] [--csv]
@@ -13,7 +14,7 @@ in the listed directions (the header must then have no [domain]). --csv writes t
 to CSV files beside CASE.toml instead (CASE.MATERIAL.csv, CASE.MATERIAL.frozen.csv for frozen
 atoms), read by one [[particles]] table each: a case of 10^5 particles then loads in a
 fraction of the time and memory. The particles are then grouped by material and frozen
-state, in id order within a group. The density check: the (mass = density * pi d^3 / 6 in both codes). Python 3
+state, in id order within a group. (Both codes take mass = density * pi d^3 / 6.) Python 3
 standard library only.
 """
 import argparse

@@ -20,10 +20,11 @@ For every code and problem: particle-steps per second (atoms x steps / loop time
 its summary.json, which times the step loop only, as LAMMPS's "Loop time" does), median and
 best of the runs, the ratio cohdem/peer, and the physics after the same simulated time:
 translational kinetic energy and mean flow velocity of the free particles (x for the chute,
-z for the packing), and the memory: each run's peak resident memory of the whole process (the kernel's
-high-water mark; cohdem's own record of it, which also covers the loading of its case)
-over the particle count, median of the runs (column B/particle), and cohdem's time loop
-alone (summary.json's peak_rss_run_bytes). Results also go to OUT/results.json. Python 3 standard library only.
+z for the packing), and the memory: each run's peak resident memory of the whole process
+(the kernel's high-water mark; cohdem's own record of it, which also covers the loading of
+its case) over the particle count, median of the runs (column B/particle), and cohdem's
+time loop alone (summary.json's peak_rss_run_bytes). Results also go to OUT/results.json.
+Python 3 standard library only.
 
 Pinning (one thread and one rank, the default): every run of round r is pinned to the same
 core, core r mod (cores this process may use), so that within a round every code runs on the

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Scaling and memory table of cohdem: particle-steps per second and bytes per particle
-(peak resident memory of the time loop over the particle count; and of the whole process,
-whose peak for these cases is the parse of the case file, which lists every particle) for
-10^3 .. 10^6 particles on 1 and 2 threads.
+(peak resident memory of the time loop over the particle count, and of the whole process:
+the cases read their particles from CSV files, so the two are about the same) for 10^3 ..
+10^6 particles on 1 and 2 threads.
 
   python3 bench/scaling.py                       # N = 1e3,1e4,1e5,1e6; threads 1,2; best of 3
   python3 bench/scaling.py --sizes 1000,10000 --threads 1 --repeat 5 --steps 300
