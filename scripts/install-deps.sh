@@ -5,7 +5,6 @@ set -euo pipefail
 PKGS=(
   build-essential cmake ninja-build pkg-config   # compiler and build system
   libtomlplusplus-dev   # case files (TOML, with line numbers for error messages)
-  libfccp-dev           # particle files of case files ([[particles]]: CSV)
   libcli11-dev          # command-line interface
   libfmt-dev libspdlog-dev   # formatting and logging
   nlohmann-json3-dev    # JSON summaries

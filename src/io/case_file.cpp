@@ -1,17 +1,8 @@
 #include "io/case_file.hpp"
 
 #include <toml++/toml.h>
-// The CSV reader of the particle files (Debian's libfccp-dev), without its reading thread.
-// (Its error type copies file names with strncpy, which g++ 12 warns about once inlined.)
-#define CSV_IO_NO_THREAD
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wstringop-truncation"
-#include <libfccp/csv.h>
-#pragma GCC diagnostic pop
 
 #include <algorithm>
-#include <charconv>
-#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +11,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "io/csv.hpp"
 #include "io/toml_section.hpp"
 #include "models/registry.hpp"
 
@@ -171,55 +163,39 @@ std::string beside_case(const std::string& case_file, const std::string& rel) {
   return (std::filesystem::path(case_file).parent_path() / r).string();
 }
 
-/// The particles of a [[particles]] file (see docs/case-file.md): a CSV file with a header
-/// naming its columns, x, y, z and radius required, vx, vy, vz, wx, wy, wz optional (zero),
-/// others ignored; '#' starts a comment line. libfccp splits the lines; the numbers are read
-/// with std::from_chars (correctly rounded, as the TOML parser reads them). Errors name the
-/// CSV file, its line and the column.
-void read_particle_file(const std::string& path, const Section& s, ExplicitParticle proto,
+/// The particles of a [[particles]] file (see docs/case-file.md): a numeric CSV table
+/// (io/csv.hpp: a header naming the columns, '#' comment lines, numbers read correctly
+/// rounded, errors naming the file, line and column) with columns x, y, z and radius, and
+/// optionally vx, vy, vz, wx, wy, wz (zero when absent); other columns are ignored.
+void read_particle_file(const std::string& path, const Section& s, const ExplicitParticle& proto,
                         std::vector<ExplicitParticle>& out) {
   if (!std::ifstream(path)) s.fail("file", "cannot open particle file '" + path + "'");
+  const CsvTable t = CsvTable::read(path);
+  if (t.num_rows() == 0) s.fail("file", "particle file '" + path + "' has no particle rows");
   static const char* const kCols[10] = {"x", "y", "z", "radius", "vx", "vy", "vz", "wx", "wy", "wz"};
-  const size_t first = out.size();
-  try {
-    io::CSVReader<10, io::trim_chars<' ', '\t'>, io::no_quote_escape<','>, io::throw_on_overflow,
-                  io::single_line_comment<'#'>>
-        in(path);
-    in.read_header(io::ignore_extra_column | io::ignore_missing_column, kCols[0], kCols[1], kCols[2], kCols[3],
-                   kCols[4], kCols[5], kCols[6], kCols[7], kCols[8], kCols[9]);
-    for (;;) {
-      char* col[10] = {};
-      if (!in.read_row(col[0], col[1], col[2], col[3], col[4], col[5], col[6], col[7], col[8], col[9])) break;
-      const int line = int(in.get_file_line());
-      double v[10] = {};
-      for (int k = 0; k < 10; ++k) {
-        if (col[k] == nullptr) {
-          if (k < 4)
-            throw InputError(path, 1, "", std::string("missing column '") + kCols[k] +
-                                              "' in the header (required: x, y, z, radius; optional: vx, vy, vz, wx, wy, wz)");
-          continue;
-        }
-        const char* b = col[k];
-        const char* e = b + std::strlen(b);
-        if (*b == '+' && b + 1 < e && b[1] != '+' && b[1] != '-') ++b;  // from_chars takes no leading '+'
-        const auto [end, ec] = std::from_chars(b, e, v[k]);
-        if (b == e || ec != std::errc() || end != e || !std::isfinite(v[k]))
-          throw InputError(path, line, "", std::string("column '") + kCols[k] + "': expected a finite number, got '" +
-                                               col[k] + "'");
-      }
-      if (!(v[3] > 0))
-        throw InputError(path, line, "", "column 'radius': expected a number > 0 m, got " + std::string(col[3]));
-      ExplicitParticle p = proto;
-      p.x = {v[0], v[1], v[2]};
-      p.radius = v[3];
-      p.v = {v[4], v[5], v[6]};
-      p.omega = {v[7], v[8], v[9]};
-      out.push_back(p);
-    }
-  } catch (const io::error::base& e) {  // the CSV's structure: its message names the file and line
-    throw InputError(path, 0, "", std::string("particle file: ") + e.what());
+  const std::vector<double>* col[10] = {};
+  for (int k = 0; k < 10; ++k) {
+    if (t.has(kCols[k])) col[k] = &t.column(kCols[k]);
+    else if (k < 4)
+      throw InputError(path, 1, kCols[k], "missing column in the header (required: x, y, z, radius; optional: vx, vy, "
+                                          "vz, wx, wy, wz)");
   }
-  if (out.size() == first) s.fail("file", "particle file '" + path + "' has no particle rows");
+  out.reserve(out.size() + t.num_rows());
+  for (size_t r = 0; r < t.num_rows(); ++r) {
+    double v[10] = {};
+    for (int k = 0; k < 10; ++k) {
+      if (!col[k]) continue;
+      v[k] = (*col[k])[r];
+      if (!std::isfinite(v[k])) throw InputError(path, t.line_of_row(r), kCols[k], "expected a finite number");
+    }
+    if (!(v[3] > 0)) throw InputError(path, t.line_of_row(r), "radius", "expected a number > 0 m");
+    ExplicitParticle p = proto;
+    p.x = {v[0], v[1], v[2]};
+    p.radius = v[3];
+    p.v = {v[4], v[5], v[6]};
+    p.omega = {v[7], v[8], v[9]};
+    out.push_back(p);
+  }
 }
 
 int material_index(const Case& c, Section& s, const std::string& key) {

@@ -174,10 +174,11 @@ CsvTable CsvTable::parse(std::string_view text, const std::string& source) {
     for (size_t c = 0; c < fields.size(); ++c) {
       const std::string& f = fields[c];
       double v = 0;
-      // from_chars rejects a leading '+', which people do write; skip it.
+      // from_chars rejects a leading '+', which people do write; skip it (only it: "+-1" is
+      // not a number).
       const char* b = f.data();
       const char* e = f.data() + f.size();
-      if (b != e && *b == '+') ++b;
+      if (e - b > 1 && *b == '+' && b[1] != '+' && b[1] != '-') ++b;
       const auto [ptr, ec] = std::from_chars(b, e, v);
       if (f.empty() || ec == std::errc::invalid_argument || ptr != e)
         throw InputError(source, line_no, t.names_[c],
