@@ -319,8 +319,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     dep_lo.resize(n);
     start[0] = rstart[0] = 0;
     fill_.resize(n);
-    x_ref_.resize(n);  // the reference state for the rebuild trigger (step 7), copied by range
-    r_ref_.resize(n);
+    ref_.x.resize(n);  // the reference state for the rebuild trigger (step 7), copied by range
+    ref_.r.resize(n);
     const int rows_threads = nthreads > 1 && n > 0 ? nthreads : 1;
     part_.assign(2 * size_t(rows_threads), 0);
 #pragma omp parallel num_threads(rows_threads) if (rows_threads > 1)
@@ -331,8 +331,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       uint32_t* const rs = rstart.data() + 1;
       uint32_t* const dl = dep_lo.data();
       for (uint32_t i = lo; i < hi; ++i) { st[i] = 0; rs[i] = 0; dl[i] = i; }
-      std::copy(x + lo, x + hi, x_ref_.data() + lo);  // read by the force loop's fused drift
-      std::copy(rad + lo, rad + hi, r_ref_.data() + lo);
+      std::copy(x + lo, x + hi, ref_.x.data() + lo);  // read by the force loop's fused drift
+      std::copy(rad + lo, rad + hi, ref_.r.data() + lo);
       for (int ch = 0; ch < chunks; ++ch) {
         const std::array<uint32_t, 4>& rg = tl_rng_[size_t(ch)];
         if ((rg[1] < lo || rg[0] >= hi) && (rg[3] < lo || rg[2] >= hi)) continue;  // none of the range's
@@ -533,10 +533,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ids_.assign(p.id.begin(), p.id.end());
 
   // 7. Reference state for the rebuild trigger.
-  // (x_ref_ and r_ref_ were copied with the rows, above: positions and radii have not
+  // (ref_.x and ref_.r were copied with the rows, above: positions and radii have not
   // changed since the wrap.)
-  wall_ref_.resize(walls.size());
-  for (size_t w = 0; w < walls.size(); ++w) wall_ref_[w] = walls[w].point;
+  ref_.wall.resize(walls.size());
+  for (size_t w = 0; w < walls.size(); ++w) ref_.wall[w] = walls[w].point;
   ++stats.builds;
 }
 
@@ -584,7 +584,7 @@ bool NeighborList::rebuild_due(const Drift& d, const std::vector<Wall>& walls, d
   }
   if (rel + 2 * d.grow > skin) return true;
   for (size_t w = 0; w < walls.size(); ++w)
-    if (dmax + d.grow + walls[w].geometric_displacement(walls[w].point - wall_ref_[w]) > skin) return true;
+    if (dmax + d.grow + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]) > skin) return true;
   return false;
 }
 

@@ -140,7 +140,7 @@ class NeighborList {
   /// the reference below); walls are judged here. Needs has_reference(n).
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
-  bool has_reference(size_t n) const { return x_ref_.size() == n; }
+  bool has_reference(size_t n) const { return ref_.x.size() == n; }
   /// Adds particle i's displacement and radius growth since the build to d (a frozen
   /// particle only marks d.frozen). Needs has_reference(p.size()).
   COHDEM_INLINE void add_drift(Drift& d, const ParticleStore& p, size_t i) const {
@@ -152,12 +152,12 @@ class NeighborList {
   /// The same for particle i, which can move, now at x with radius r (the force loop's fused
   /// drift passes its fresh values).
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x, double r) const {
-    d.add(x - x_ref_[i], r - r_ref_[i]);
+    d.add(x - ref_.x[i], r - ref_.r[i]);
   }
   /// The same for a particle whose radius has not changed since the build (the force loop's
   /// fused drift: it runs only without a thermal model, the one thing that changes radii
   /// between builds), so its radius growth, 0, is not read.
-  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - x_ref_[i]); }
+  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - ref_.x[i]); }
 
   /// The state the lists were last built from (positions, radii, wall points): a checkpoint
   /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any
@@ -167,7 +167,7 @@ class NeighborList {
     std::vector<double> r;
     std::vector<Vec3> wall;
   };
-  Reference reference() const { return {x_ref_, r_ref_, wall_ref_}; }
+  const Reference& reference() const { return ref_; }
   /// Builds the lists as they were built from `ref` (particles in their current order, no
   /// re-sort), leaving positions, radii and walls as they are now. Throws RunError when `ref`
   /// does not match the particle or wall count.
@@ -179,9 +179,7 @@ class NeighborList {
   size_t live_contacts() const;
 
  private:
-  std::vector<Vec3> x_ref_;
-  std::vector<double> r_ref_;
-  std::vector<Vec3> wall_ref_;
+  Reference ref_;
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
   std::vector<Wall> wide_;
