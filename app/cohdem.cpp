@@ -146,13 +146,13 @@ int main(int argc, char** argv) {
   try {
     if (run->parsed()) {
       if (threads > 0) sets.push_back("simulation.threads=" + std::to_string(threads));
-      const Case c = load(case_path, sets);
+      Case c = load(case_path, sets);
       RunOptions o;
       o.out_dir = out_dir;
       o.quiet = quiet;
       o.resume = resume;
       o.max_wall_time = max_wall_time;
-      return run_case(c, o);
+      return run_case(std::move(c), o);
     }
     if (check->parsed()) return check_case(load(case_path, sets));
     if (contact->parsed()) {

@@ -241,13 +241,14 @@ void write_state_vtk(const System& s, const std::string& dir, const std::string&
   if (contacts) write_vtu(d / ("contacts_" + tag + ".vtu"), contact_network_vtu(s));
 }
 
-int run_case(const Case& c, const RunOptions& opt) {
+int run_case(Case c, const RunOptions& opt) {
   if (c.ring_shear) return run_ring_shear(c, opt);  // resumes from its own stage checkpoints
   using clock = std::chrono::steady_clock;
   spdlog::info("case {} ({})", c.name.empty() ? c.file : c.name, c.file);
   const bool resuming = !opt.resume.empty();
   auto sys = build_system(c, !resuming);
   System& s = *sys;
+  std::vector<ExplicitParticle>().swap(c.particles);  // the system holds them now
   if (resuming) {
     if (const std::string app = read_checkpoint(opt.resume, s); !app.empty()) {
       // An application's checkpoint: a packed-bed protocol's stage (CBOR with a "complete"

@@ -26,8 +26,11 @@ std::vector<double> min_radius_by_material(const System& s);
 /// Audit velocity: the case's, else max(1 m/s, sqrt(2 |g| H), insertion and wall speeds).
 double audit_velocity(const Case& c);
 
-/// Runs a case to completion. Throws InputError/RunError; returns the exit status.
-int run_case(const Case& c, const RunOptions& opt);
+/// Runs a case to completion. Throws InputError/RunError; returns the exit status. The case
+/// is taken by value: its particle list (up to ~100 bytes a particle, read from
+/// [[particle]] tables or [[particles]] files) is released once the system holds the
+/// particles, so it does not count in the run's memory; pass an rvalue to avoid the copy.
+int run_case(Case c, const RunOptions& opt);
 
 /// Writes one state as particles_TAG.vtu, walls_TAG.vtu and (with `contacts`) contacts_TAG.vtu
 /// in `dir`: the same arrays as the frames of `cohdem run`.
