@@ -618,6 +618,11 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
   s->set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
   s->walls = c.walls;
   if (c.thermal.enabled) s->thermal = std::make_shared<ThermalModel>(c.thermal, c.materials);
+  if (fill) {  // the particle arrays sized to what is known (fills to a solids fraction: trimmed below)
+    size_t n = c.particles.size();
+    for (const auto& st : c.inserts) n += st.pour ? 0 : st.spec.count;
+    s->particles.reserve(n);
+  }
   for (const auto& p : c.particles) {
     if (!fill) break;
     const size_t i = s->add_particle(p.material, p.radius, p.x, p.v, p.omega);
@@ -643,6 +648,7 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
       }
     }
   }
+  s->particles.shrink_to_fit();  // a fill to a solids fraction grew them by doubling
   return s;
 }
 

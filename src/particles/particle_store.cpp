@@ -38,6 +38,18 @@ void ParticleStore::resize(size_t n) {
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->resize(n);
 }
 
+void ParticleStore::reserve(size_t n) {
+  id.reserve(n); species.reserve(n); flag.reserve(n); body.reserve(n);
+  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->reserve(n);
+  for (auto* a : {&x, &v, &omega, &force, &torque}) a->reserve(n);
+}
+
+void ParticleStore::shrink_to_fit() {
+  id.shrink_to_fit(); species.shrink_to_fit(); flag.shrink_to_fit(); body.shrink_to_fit();
+  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->shrink_to_fit();
+  for (auto* a : {&x, &v, &omega, &force, &torque}) a->shrink_to_fit();
+}
+
 void ParticleStore::erase_if_flagged(const std::vector<uint8_t>& remove) {
   compact(id, remove); compact(species, remove); compact(flag, remove); compact(body, remove);
   for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) compact(*a, remove);

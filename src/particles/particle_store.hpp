@@ -55,6 +55,11 @@ struct ParticleStore {
   void permute(const std::vector<uint32_t>& perm);
 
   void resize(size_t n);
+  /// Capacity for n particles in every array (growth by add() doubles it: up to 2x the
+  /// memory of the particles when their count is known beforehand).
+  void reserve(size_t n);
+  /// Drops every array's unused capacity.
+  void shrink_to_fit();
   void erase_if_flagged(const std::vector<uint8_t>& remove);
 };
 
