@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "../physics/fixture.hpp"
 #include "io/checkpoint.hpp"
@@ -114,5 +115,37 @@ TEST(Checkpoint, RejectsOtherModelAndTruncation) {
   std::filesystem::resize_file(path, 100);
   auto b = setup();
   EXPECT_THROW(read_checkpoint(path, *b), InputError);
+  std::filesystem::remove(path);
+}
+
+// A corrupt array length (here 2^62 particle ids, as a damaged file could hold) is reported as
+// a truncated file before anything is allocated for it, not as std::bad_alloc or a crash.
+TEST(Checkpoint, RejectsCorruptLengthBeforeAllocating) {
+  auto a = setup();
+  a->add_particle(0, 5e-4, {0.005, 0, 0.001});
+  a->prepare();
+  const auto path = std::filesystem::temp_directory_path() / ("cohdem_test_checkpoint3_" + std::to_string(::getpid()) + ".bin");
+  write_checkpoint(path, *a);
+  // The layout up to the first array (the particle ids): magic (8), version (4), model name
+  // (8 + its length), history stride (8), time, step, next id, builds (8 each), the random
+  // generator's state (8 + its length).
+  const size_t at = 8 + 4 + 8 + a->model->name().size() + 8 + 4 * 8 + 8 + a->rng.state().size();
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    uint64_t n = 0;
+    f.seekg(std::streamoff(at));
+    f.read(reinterpret_cast<char*>(&n), sizeof n);
+    ASSERT_EQ(n, 1u);  // the layout above is right: one particle
+    n = uint64_t(1) << 62;
+    f.seekp(std::streamoff(at));
+    f.write(reinterpret_cast<const char*>(&n), sizeof n);
+  }
+  auto b = setup();
+  try {
+    read_checkpoint(path, *b);
+    ADD_FAILURE() << "a corrupt length was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
   std::filesystem::remove(path);
 }
