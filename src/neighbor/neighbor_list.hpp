@@ -188,12 +188,16 @@ class NeighborList {
   std::vector<size_t> tl_cnt_;                 // their counts (the buffers keep their length)
   std::vector<std::array<uint32_t, 4>> tl_rng_;  // their lowest and highest rows and partners
   std::vector<uint64_t> part_;                 // per thread range: its rows' and transposed rows' entries
-  // The previous lists during a build (swapped, not copied) and the ids of their rows.
+  // The previous lists during a build (pairs: their live contacts, copied; walls: swapped)
+  // and the ids of their rows.
   std::vector<uint64_t> ids_, old_ids_;
   std::vector<uint32_t> old_start_, old_jdx_, old_wstart_, new_of_id_;
   std::vector<uint16_t> old_wall_;
-  std::vector<std::byte> old_hist_, old_whist_;
-  std::vector<uint8_t> old_live_, old_wlive_;
+  std::vector<std::byte> old_hist_, old_whist_;  // old_hist_: live pair contacts only
+  std::vector<uint8_t> old_wlive_;
+  /// Copies the live pair contacts of the current lists (old_n rows) into old_start_,
+  /// old_jdx_ and old_hist_, compactly, before the lists' storage is reused by a build.
+  void keep_live_pairs(size_t old_n);
 };
 
 }  // namespace cohdem
