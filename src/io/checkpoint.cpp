@@ -35,6 +35,7 @@ class Out {
     pod(uint64_t(s.size()));
     os_.write(s.data(), std::streamsize(s.size()));
   }
+  void bytes(const std::byte* p, uint64_t n) { os_.write(reinterpret_cast<const char*>(p), std::streamsize(n)); }
 
  private:
   std::ostream& os_;
@@ -108,8 +109,22 @@ void write_checkpoint(const std::filesystem::path& path, const System& s, const 
   }
   o.pod(uint64_t(s.pours.size()));
   for (const PourSource& p : s.pours) { o.pod(p.inserted); o.pod(p.next_time); }
-  const System::SavedContacts c = s.saved_contacts();
-  o.vec(c.pair_keys); o.vec(c.pair_data); o.vec(c.wall_keys); o.vec(c.wall_data);
+  // The live contacts, in SavedContacts' layout (pair keys, pair records, wall keys, wall
+  // records, each array after its length), written from the lists in three passes.
+  uint64_t npair = 0, nwall = 0;
+  s.visit_live_contacts([&](uint64_t, uint64_t, const std::byte*) { ++npair; },
+                        [&](uint64_t, uint64_t, const std::byte*) { ++nwall; });
+  const uint64_t st = s.model->state_size();
+  auto keys = [&](uint64_t a, uint64_t b, const std::byte*) { o.pod(a); o.pod(b); };
+  auto none = [](uint64_t, uint64_t, const std::byte*) {};
+  o.pod(npair);
+  s.visit_live_contacts(keys, none);
+  o.pod(npair * st);
+  s.visit_live_contacts([&](uint64_t, uint64_t, const std::byte* r) { o.bytes(r, st); }, none);
+  o.pod(nwall);
+  s.visit_live_contacts(none, keys);
+  o.pod(nwall * st);
+  s.visit_live_contacts(none, [&](uint64_t, uint64_t, const std::byte* r) { o.bytes(r, st); });
   const NeighborList::Reference& ref = s.nl.reference();
   o.vec(ref.x); o.vec(ref.r); o.vec(ref.wall);
   o.str(app_state);

@@ -471,29 +471,36 @@ int check_case(const Case& c) {
   s.walls = c.walls;
   std::vector<double> rmin(c.materials.size(), 0.0);
   std::vector<double> count(c.materials.size(), 0.0), mass(c.materials.size(), 0.0);
-  auto take = [&](int m, double r) { rmin[m] = rmin[m] > 0 ? std::min(rmin[m], r) : r; };
+  double rmax = 0, volume = 0;  // largest radius, particles' total volume (memory estimate)
+  auto take = [&](int m, double r, double r_hi) {
+    rmin[m] = rmin[m] > 0 ? std::min(rmin[m], r) : r;
+    rmax = std::max(rmax, r_hi);
+  };
   for (const auto& st : c.inserts) {
     const int m = st.spec.species;
-    take(m, st.spec.size.min_radius());
+    take(m, st.spec.size.min_radius(), st.spec.size.max_radius());
     const double n = st.spec.count ? double(st.spec.count)
                                    : std::floor(st.spec.solids_fraction * st.spec.region.volume() / st.spec.size.mean_volume());
     count[m] += n;
     mass[m] += n * st.spec.size.mean_volume() * c.materials[m].density;
+    volume += n * st.spec.size.mean_volume();
   }
   if (c.ring_shear) {
     const RingShearSpec& r = *c.ring_shear;
     const double area = r.cell == "shear_box" ? r.length * r.width : M_PI * (r.r_outer * r.r_outer - r.r_inner * r.r_inner);
     const double n = std::ceil(r.packing_guess * area * r.bed_height / r.size.mean_volume());
-    take(r.material, r.size.min_radius());
+    take(r.material, r.size.min_radius(), r.size.max_radius());
     count[r.material] += n;
     mass[r.material] += n * r.size.mean_volume() * c.materials[r.material].density;
+    volume += n * r.size.mean_volume();
     fmt::print("ring shear: {} cell, area {:.4g} m^2, sigma_pre {:.4g} Pa, {} shear points (plus rough layers)\n", r.cell, area,
                r.sigma_pre, r.fractions.size());
   }
   for (const auto& p : c.particles) {
-    take(p.material, p.radius);
+    take(p.material, p.radius, p.radius);
     count[p.material] += 1;
     mass[p.material] += 4.0 / 3.0 * M_PI * std::pow(p.radius, 3) * c.materials[p.material].density;
+    volume += 4.0 / 3.0 * M_PI * std::pow(p.radius, 3);
   }
   double total = 0;
   fmt::print("case: {} ({})\n", c.name.empty() ? "(unnamed)" : c.name, c.file);
@@ -515,11 +522,25 @@ int check_case(const Case& c) {
   if (a.rayleigh > 0) crit = std::min(crit, kWarnRayleigh * a.rayleigh);
   if (a.collision > 0 && std::isfinite(a.collision)) crit = std::min(crit, a.collision / kWarnStepsPerCollision);
   if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
-  // Memory: particle arrays plus ~8 list entries per particle (half list with skin).
-  const double per_particle = 8 + 4 + 1 + 4 + 8 * 8 + 24 * 7 + 8 + 24 + 8;
-  const double per_entry = 4 + 1 + 1 + 4 + 3 * 24 + double(s.model->state_size());
-  const double bytes = total * (per_particle + 8 * per_entry);
-  fmt::print("memory estimate: {:.1f} MiB ({:.0f} bytes per particle)\n", bytes / 1048576.0, per_particle + 8 * per_entry);
+  // Memory of a one-thread run (the whole process's peak, as summary.json's peak_rss_bytes
+  // measures it): per particle, the particle arrays (185 bytes, particles/particle_store.hpp),
+  // the lists' per-particle arrays and reference state (88) and the force loop's reverse sums
+  // (48); per entry of the half list, partner, image, transposed index, live flag, the pair
+  // as found at a build (9) and the history record, with the lists' eighth of headroom. The
+  // half list of a bed at random close packing (solids fraction 0.64) holds
+  // 0.5 x 0.64 x 8 (1 + skin / d)^3 entries per particle of diameter d (here the particles'
+  // volume-mean diameter; d = 1, skin 0.1: 3.4, the chute benchmark's measured 3.47). Plus
+  // the program itself, ~6 MiB. A looser bed or a gas holds fewer entries, so this is an
+  // upper estimate for one size of particles.
+  if (total > 0) {
+    const double d = 2 * std::cbrt(3 * volume / (4 * M_PI * total));
+    const double skin = c.cfg.skin > 0 ? c.cfg.skin : 0.2 * rmax;  // System::prepare's default
+    const double entries = 0.5 * 0.64 * 8 * std::pow(1 + skin / d, 3);
+    const double per_particle = 185 + 88 + 48 + 1.125 * entries * (19 + double(s.model->state_size()));
+    const double bytes = 6.0 * 1048576 + total * per_particle;
+    fmt::print("memory estimate: {:.1f} MiB, one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
+               bytes / 1048576.0, bytes / total, entries);
+  }
   if (c.thermal.enabled) {
     int fixed = 0;
     for (const auto& w : c.thermal.walls) fixed += w.fixed;

@@ -91,26 +91,6 @@ void System::prepare() {
   dirty_ = false;
 }
 
-System::SavedContacts System::saved_contacts() const {
-  SavedContacts c;
-  const size_t st = nl.hist.stride;
-  for (size_t i = 0; i + 1 < nl.start.size(); ++i)
-    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-      if (nl.hist.live[k]) {
-        c.pair_keys.emplace_back(particles.id[i], particles.id[nl.jdx[k]]);
-        const std::byte* b = nl.hist.data.data() + k * st;
-        c.pair_data.insert(c.pair_data.end(), b, b + st);
-      }
-  for (size_t i = 0; i + 1 < nl.wstart.size(); ++i)
-    for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e)
-      if (nl.whist.live[e]) {
-        c.wall_keys.emplace_back(particles.id[i], nl.wall[e]);
-        const std::byte* b = nl.whist.data.data() + e * st;
-        c.wall_data.insert(c.wall_data.end(), b, b + st);
-      }
-  return c;
-}
-
 void System::install_pending() {
   // Match saved keys against the freshly built lists (both small: a map is fine here).
   const size_t st = nl.hist.stride;

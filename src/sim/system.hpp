@@ -121,7 +121,18 @@ class System {
     std::vector<std::pair<uint64_t, uint64_t>> pair_keys, wall_keys;
     std::vector<std::byte> pair_data, wall_data;
   };
-  SavedContacts saved_contacts() const;
+  /// Calls pair(id_i, id_j, record) for every live pair contact, then wall(particle id, wall
+  /// index, record) for every live wall contact, in list order; each record is state_size()
+  /// bytes. A checkpoint writes them from here, without a copy.
+  template <class PairFn, class WallFn>
+  void visit_live_contacts(PairFn&& pair, WallFn&& wall) const {
+    for (size_t i = 0; i + 1 < nl.start.size(); ++i)
+      for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
+        if (nl.hist.live[k]) pair(particles.id[i], particles.id[nl.jdx[k]], nl.hist.data.data() + k * nl.hist.stride);
+    for (size_t i = 0; i + 1 < nl.wstart.size(); ++i)
+      for (uint32_t e = nl.wstart[i]; e < nl.wstart[i + 1]; ++e)
+        if (nl.whist.live[e]) wall(particles.id[i], uint64_t(nl.wall[e]), nl.whist.data.data() + e * nl.whist.stride);
+  }
   void restore_contacts(SavedContacts c) { pending_ = std::move(c); has_pending_ = true; dirty_ = true; }
 
   /// Reach (m) of the contact law for neighbor search (adhesive range).
