@@ -526,19 +526,21 @@ int check_case(const Case& c) {
   // measures it): per particle, the particle arrays (185 bytes, particles/particle_store.hpp),
   // the lists' per-particle arrays and reference state (88) and the force loop's reverse sums
   // (48); per entry of the half list, partner, image, transposed index, live flag, the pair
-  // as found at a build (9) and the history record, with the lists' eighth of headroom. The
-  // half list of a bed at random close packing (solids fraction 0.64) holds
-  // 0.5 x 0.64 x 8 (1 + skin / d)^3 entries per particle of diameter d (here the particles'
-  // volume-mean diameter; d = 1, skin 0.1: 3.4, the chute benchmark's measured 3.47). Plus
-  // the program itself, ~6 MiB. A looser bed or a gas holds fewer entries, so this is an
-  // upper estimate for one size of particles.
+  // as found at a build (9) and the history record, with the lists' eighth of headroom; per
+  // contact, the copy a build makes of it (partner and record). The half list of a bed at
+  // random close packing (solids fraction 0.64) holds 0.5 x 0.64 x 8 (1 + skin / d)^3
+  // entries per particle of diameter d (here the particles' volume-mean diameter; d = 1,
+  // skin 0.1: 3.4, the chute benchmark's measured 3.47), and 3 contacts (coordination
+  // number 6). Plus the program itself, ~7 MiB. A looser bed or a gas holds fewer entries
+  // and contacts, so this is an upper estimate for one size of particles.
   if (total > 0) {
     const double d = 2 * std::cbrt(3 * volume / (4 * M_PI * total));
     const double skin = c.cfg.skin > 0 ? c.cfg.skin : 0.2 * rmax;  // System::prepare's default
     const double entries = 0.5 * 0.64 * 8 * std::pow(1 + skin / d, 3);
-    const double per_particle = 185 + 88 + 48 + 1.125 * entries * (19 + double(s.model->state_size()));
-    const double bytes = 6.0 * 1048576 + total * per_particle;
-    fmt::print("memory estimate: {:.1f} MiB, one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
+    const double rec = double(s.model->state_size());
+    const double per_particle = 185 + 88 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
+    const double bytes = 7.0 * 1048576 + total * per_particle;
+    fmt::print("memory estimate: {:.1f} MiB for the time loop on one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
                bytes / 1048576.0, bytes / total, entries);
   }
   if (c.thermal.enabled) {
