@@ -522,8 +522,9 @@ int check_case(const Case& c) {
   if (a.rayleigh > 0) crit = std::min(crit, kWarnRayleigh * a.rayleigh);
   if (a.collision > 0 && std::isfinite(a.collision)) crit = std::min(crit, a.collision / kWarnStepsPerCollision);
   if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
-  // Memory of a one-thread run (the whole process's peak, as summary.json's peak_rss_bytes
-  // measures it): per particle, the particle arrays (185 bytes, particles/particle_store.hpp),
+  // Memory of a one-thread run's time loop (its peak, as summary.json's peak_rss_run_bytes
+  // measures it; with [[particle]] tables the parse of the case file can peak higher, about
+  // 2 kB a particle): per particle, the particle arrays (185 bytes, particles/particle_store.hpp),
   // the lists' per-particle arrays and reference state (88) and the force loop's reverse sums
   // (48); per entry of the half list, partner, image, transposed index, live flag, the pair
   // as found at a build (9) and the history record, with the lists' eighth of headroom; per

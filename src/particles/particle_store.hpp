@@ -55,8 +55,8 @@ struct ParticleStore {
   void permute(const std::vector<uint32_t>& perm);
 
   void resize(size_t n);
-  /// Capacity for n particles in every array (growth by add() doubles it: up to 2x the
-  /// memory of the particles when their count is known beforehand).
+  /// Capacity for n particles in every array. Without it add() grows the arrays by
+  /// doubling, which can leave up to half of their memory unused.
   void reserve(size_t n);
   /// Drops every array's unused capacity.
   void shrink_to_fit();
