@@ -495,6 +495,7 @@ Case parse(toml::table& root, const std::string& file) {
     s.finish();
     c.particles.push_back(p);
   }
+  c.particle_tables = c.particles.size();
   // [[particles]]: particles listed in CSV files.
   for (Section s : top.tables("particles")) {
     ExplicitParticle proto;

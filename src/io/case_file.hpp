@@ -58,6 +58,7 @@ struct Case {
   std::vector<Wall> walls;
   std::vector<InsertStep> inserts;
   std::vector<ExplicitParticle> particles;
+  size_t particle_tables = 0;   ///< how many of them came from [[particle]] tables
   OutputSettings output;
   std::optional<RingShearSpec> ring_shear;  ///< [ring_shear]: run the ring shear tester
   ThermalSettings thermal;      ///< [thermal], wall temperatures, [[heat_source]]
