@@ -23,7 +23,8 @@ translational kinetic energy and mean flow velocity of the free particles (x for
 z for the packing), and the memory: each run's peak resident memory of the whole process
 (the kernel's high-water mark; cohdem's own record of it, which also covers the loading of
 its case) over the particle count, median of the runs (column B/particle), and cohdem's
-time loop alone (summary.json's peak_rss_run_bytes). Results also go to OUT/results.json.
+time loop alone (summary.json's peak_rss_run_bytes); for the peers on several MPI ranks, the
+sum of the ranks' peaks. Results also go to OUT/results.json.
 Python 3 standard library only.
 
 Pinning (one thread and one rank, the default): every run of round r is pinned to the same
@@ -48,12 +49,29 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 
 
-def sh(cmd, cwd, log, cpu=None):
+# For MPI runs each rank runs under this wrapper (its first argument a folder, the rest the
+# command). When the rank ends, the wrapper writes the rank's own peak resident memory (its
+# process's high-water mark, as for one process) to a file of its own in that folder, and
+# sh() sums them. (Printed instead, a rank's last line was lost now and then as mpirun shut
+# down.)
+RANK_WRAPPER = ("import os, subprocess, sys\n"
+                "p = subprocess.Popen(sys.argv[2:])\n"
+                "_, st, ru = os.wait4(p.pid, 0)\n"
+                "open(os.path.join(sys.argv[1], str(os.getpid())), 'w').write(str(ru.ru_maxrss * 1024))\n"
+                "sys.exit(os.waitstatus_to_exitcode(st))\n")
+
+
+def sh(cmd, cwd, log, cpu=None, rank_dir=None):
     """Runs cmd (list), output to log; returns the output text and the run's peak resident
     memory in bytes. Raises on failure. cpu: the core the run is pinned to (None: not
     pinned). The memory is the kernel's high-water mark of the process (os.wait4's
-    ru_maxrss), the same measure for every code: binary, libraries, input and all; for an
-    MPI run it is the largest process (mpirun or a rank)."""
+    ru_maxrss), the same measure for every code: binary, libraries, input and all. For an
+    MPI run whose ranks run under RANK_WRAPPER writing to rank_dir, it is the sum of the
+    ranks' high-water marks: the job's memory without the launcher (an upper bound when
+    the ranks peak at different times)."""
+    if rank_dir is not None:
+        shutil.rmtree(rank_dir, ignore_errors=True)
+        os.makedirs(rank_dir)
     pin = None if cpu is None else (lambda: os.sched_setaffinity(0, {cpu}))
     with open(log, "w") as f:
         proc = subprocess.Popen(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin)
@@ -62,7 +80,12 @@ def sh(cmd, cwd, log, cpu=None):
     text = open(log).read()
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}); see {log}:\n{text[-2000:]}")
-    return text, usage.ru_maxrss * 1024  # KiB on Linux
+    if rank_dir is None:
+        return text, usage.ru_maxrss * 1024  # KiB on Linux
+    ranks = [int(open(os.path.join(rank_dir, r)).read()) for r in os.listdir(rank_dir)]
+    if not ranks:
+        raise RuntimeError(f"{' '.join(cmd)}: no rank recorded its memory in {rank_dir}")
+    return text, sum(ranks)
 
 
 def peer_loop(text):
@@ -198,7 +221,9 @@ def main():
 
     prepare_inputs(work, problems, a.chute_data, a.packing_n)
 
-    mpi = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(a.mpi)] if a.mpi > 1 else []
+    rank_dir = os.path.join(work, "rank_rss") if a.mpi > 1 else None
+    mpi = (["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(a.mpi), sys.executable, "-c", RANK_WRAPPER,
+            rank_dir] if a.mpi > 1 else [])
     # The cores of the rounds (one thread and one rank only: wider runs need every core).
     cores = sorted(os.sched_getaffinity(0)) if a.threads == 1 and a.mpi == 1 and not a.no_pin else []
     probs = problem_table()
@@ -227,7 +252,7 @@ def main():
                     rss = max(rss, j["peak_rss_bytes"])
                     res[c].setdefault("peak_rss_run_bytes", []).append(j["peak_rss_run_bytes"])
                 else:
-                    text, rss = sh(mpi + P.command(c, nsteps), work, log, cpu)
+                    text, rss = sh(mpi + P.command(c, nsteps), work, log, cpu, rank_dir)
                     r = parse_peer(text, nsteps)
                     atoms = peer_loop(text)[2]
                 res[c]["rate"].append(r[0])
