@@ -61,13 +61,13 @@ RANK_WRAPPER = ("import os, subprocess, sys\n"
                 "sys.exit(os.waitstatus_to_exitcode(st))\n")
 
 
-def sh(cmd, cwd, log, cpu=None, rank_dir=None):
+def sh(cmd, cwd, log, cpu=None, rank_dir=None, ranks=1):
     """Runs cmd (list), output to log; returns the output text and the run's peak resident
     memory in bytes. Raises on failure. cpu: the core the run is pinned to (None: not
     pinned). The memory is the kernel's high-water mark of the process (os.wait4's
     ru_maxrss), the same measure for every code: binary, libraries, input and all. For an
-    MPI run whose ranks run under RANK_WRAPPER writing to rank_dir, it is the sum of the
-    ranks' high-water marks: the job's memory without the launcher (an upper bound when
+    MPI run whose `ranks` ranks run under RANK_WRAPPER writing to rank_dir, it is the sum of
+    the ranks' high-water marks: the job's memory without the launcher (an upper bound when
     the ranks peak at different times)."""
     if rank_dir is not None:
         shutil.rmtree(rank_dir, ignore_errors=True)
@@ -82,10 +82,10 @@ def sh(cmd, cwd, log, cpu=None, rank_dir=None):
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}); see {log}:\n{text[-2000:]}")
     if rank_dir is None:
         return text, usage.ru_maxrss * 1024  # KiB on Linux
-    ranks = [int(open(os.path.join(rank_dir, r)).read()) for r in os.listdir(rank_dir)]
-    if not ranks:
-        raise RuntimeError(f"{' '.join(cmd)}: no rank recorded its memory in {rank_dir}")
-    return text, sum(ranks)
+    rss = [int(open(os.path.join(rank_dir, r)).read()) for r in os.listdir(rank_dir)]
+    if len(rss) != ranks:
+        raise RuntimeError(f"{' '.join(cmd)}: {len(rss)} of {ranks} ranks recorded their memory in {rank_dir}")
+    return text, sum(rss)
 
 
 def peer_loop(text):
@@ -252,7 +252,7 @@ def main():
                     rss = max(rss, j["peak_rss_bytes"])
                     res[c].setdefault("peak_rss_run_bytes", []).append(j["peak_rss_run_bytes"])
                 else:
-                    text, rss = sh(mpi + P.command(c, nsteps), work, log, cpu, rank_dir)
+                    text, rss = sh(mpi + P.command(c, nsteps), work, log, cpu, rank_dir, a.mpi)
                     r = parse_peer(text, nsteps)
                     atoms = peer_loop(text)[2]
                 res[c]["rate"].append(r[0])

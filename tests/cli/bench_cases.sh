@@ -135,8 +135,8 @@ ok = ok and 100 < r['run_bytes_per_particle'] <= r['bytes_per_particle']
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning, memory"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
 # peer_compare.py's memory of an MPI job, without mpirun (not installed in CI): two "ranks"
 # under its RANK_WRAPPER, each touching 60 MB, started together by a shell; sh() sums the
-# ranks' own peaks (each above 60 MB, so the sum above 120 MB, and below 2 x 200 MB), and a
-# failing rank's exit status comes through.
+# ranks' own peaks (each above 60 MB, so the sum above 120 MB, and below 2 x 200 MB); a
+# missing rank and a failing rank's exit status are errors.
 if python3 - "$src/bench" "$work" <<'PY'
 import os, sys
 sys.path.insert(0, sys.argv[1])
@@ -144,8 +144,13 @@ import peer_compare as pc
 work = sys.argv[2]
 d = os.path.join(work, "rank_rss")
 rank = f"{sys.executable} -c \"{pc.RANK_WRAPPER}\" {d} {sys.executable} -c 'b = bytearray(60_000_000); b[::4096] = b\"x\" * len(b[::4096])'"
-_, rss = pc.sh(["sh", "-c", f"{rank} & {rank}; wait"], work, os.path.join(work, "ranks.log"), rank_dir=d)
+_, rss = pc.sh(["sh", "-c", f"{rank} & {rank}; wait"], work, os.path.join(work, "ranks.log"), rank_dir=d, ranks=2)
 ok = len(os.listdir(d)) == 2 and 120e6 < rss < 400e6
+try:  # a rank that recorded nothing is an error, not a smaller sum
+    pc.sh(["sh", "-c", rank], work, os.path.join(work, "ranks1.log"), rank_dir=d, ranks=2)
+    ok = False
+except RuntimeError:
+    pass
 try:
     pc.sh(["sh", "-c", f"{sys.executable} -c \"{pc.RANK_WRAPPER}\" {d} false"], work, os.path.join(work, "ranks2.log"), rank_dir=d)
     ok = False
