@@ -145,21 +145,19 @@ TEST(ParticleFile, MalformedFilesNameTheFileLineAndColumn) {
   EXPECT_NE(m.find("key 'z': 'abc' is not a number"), std::string::npos) << m;
   EXPECT_EQ(line, 3);
   EXPECT_EQ(fs::path(file).filename(), "p.csv");
-  m = error_of(d, "x,y,z,radius\n+-1,2,3,1\n", &line);
-  EXPECT_NE(m.find("key 'x': '+-1' is not a number"), std::string::npos) << m;
-  EXPECT_EQ(line, 2);
-  m = error_of(d, "x,y,z,radius\n1,2,3,0\n", &line);
-  EXPECT_NE(m.find("key 'radius': expected a number > 0 m"), std::string::npos) << m;
-  EXPECT_EQ(line, 2);
-  m = error_of(d, "x,y,z,radius\n1,2,3,1e999\n", &line);
-  EXPECT_NE(m.find("key 'radius': '1e999' is out of range"), std::string::npos) << m;
-  EXPECT_EQ(line, 2);
-  m = error_of(d, "x,y,z,radius\n1,2,inf,1\n", &line);
-  EXPECT_NE(m.find("key 'z': expected a finite number"), std::string::npos) << m;
-  EXPECT_EQ(line, 2);
-  m = error_of(d, "x,y,z,radius\n1,2,3\n", &line);
-  EXPECT_NE(m.find("expected 4 fields (as in the header), found 3"), std::string::npos) << m;
-  EXPECT_EQ(line, 2);
+  // Malformed first rows: each error names its column (where there is one) and line 2.
+  const struct { const char* row; const char* says; } bad_rows[] = {
+      {"+-1,2,3,1", "key 'x': '+-1' is not a number"},
+      {"1,2,3,0", "key 'radius': expected a number > 0 m"},
+      {"1,2,3,1e999", "key 'radius': '1e999' is out of range"},
+      {"1,2,inf,1", "key 'z': expected a finite number"},
+      {"1,2,3", "expected 4 fields (as in the header), found 3"},
+  };
+  for (const auto& b : bad_rows) {
+    m = error_of(d, std::string("x,y,z,radius\n") + b.row + "\n", &line);
+    EXPECT_NE(m.find(b.says), std::string::npos) << b.row << ": " << m;
+    EXPECT_EQ(line, 2) << b.row;
+  }
   m = error_of(d, "x,y,z,radius\n");
   EXPECT_NE(m.find("key 'particles[0].file': particle file"), std::string::npos) << m;
   EXPECT_NE(m.find("has no particle rows"), std::string::npos) << m;
