@@ -33,6 +33,7 @@ def main():
     ap.add_argument("--filters", default=DEFAULT, help="comma-separated --benchmark_filter regexes")
     ap.add_argument("--min-time", default="0.5", help="--benchmark_min_time per run, s")
     ap.add_argument("--bench", default=os.path.join(REPO, "build", "cohdem_bench"))
+    ap.add_argument("--json", help="also write each benchmark's times, s per iteration, round by round, to this file")
     a = ap.parse_args()
     if not os.path.exists(a.bench):
         sys.exit(f"{a.bench} not found: build it first (ninja -C build cohdem_bench)")
@@ -82,6 +83,10 @@ def main():
         counters = ", ".join(f"{k} {b[k]:.3g}" for k in ("contacts_per_particle", "entries_per_particle",
                                                           "live_per_particle") if k in b)
         print(f"| {n} | {m * 1e3:.2f} | {rate:.3g} | {vs} | {same} | {counters} |")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"rounds": a.rounds, "min_time": a.min_time,
+                       "seconds_per_iteration": {n: [t for t, _, _ in runs[n]] for n in order}}, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -4,8 +4,9 @@
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
 # steps, model_cost.py prints its four rows, instructions.py counts a small packing,
 # contact_instructions.py the force loop's instructions per contact of two laws,
-# scaling.py gives its table for a small gas (with --ceiling and --per-core) and
-# peer_compare.py pins its rounds to the cores.
+# scaling.py gives its table for a small gas (with --ceiling and --per-core),
+# peer_compare.py pins its rounds to the cores, and targets.py measures and judges issue 6's
+# targets (its --quick run, and its verdicts on figures at the bounds).
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
 set -u
@@ -160,5 +161,50 @@ print("ranks' memory", rss, "bytes")
 sys.exit(0 if ok else 1)
 PY
 then pass=$((pass+1)); echo "ok   peer_compare.py: MPI ranks' memory summed"; else echo "FAIL peer_compare.py MPI ranks' memory"; fail=$((fail+1)); fi
+# targets.py end to end (--quick: a 1000/2000/4000-sphere gas and the chute, 5 steps; the
+# force-loop counts and times of two laws; no LAMMPS in CI, so no peer comparison): the table
+# has its three rows, every problem's two-thread run ended as the one-thread run did (the
+# thread-identity target, checked on the runs' own final energies), and the counted MEPA +
+# EPSD law costs more than the linear one.
+if [ -x "$bench_bin" ]; then tg_only=scaling,contacts; tg_rows=3; else tg_only=scaling; tg_rows=2; fi
+if python3 "$src/bench/targets.py" --quick --only "$tg_only" --cohdem "$bin" --bench "$bench_bin" --chute-data "$data" \
+     --out "$work/tg" > "$work/tg.log" 2>&1 &&
+   python3 -c "
+import json, sys
+t = json.load(open('$work/tg/targets.json'))
+S = t['figures']['scaling']
+ok = len(t['table']) == $tg_rows and len(S['identical']) == 4 and all(v['identical'] for v in S['identical'].values())
+C = t['figures'].get('contacts')
+ok = ok and (C is None or 1.0 < C['count_ratio'] < 3.0)
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   targets.py --quick"; else echo "FAIL targets.py --quick"; tail -5 "$work/tg.log"; fail=$((fail+1)); fi
+# targets.py's verdicts at the bounds (figures made up): >= 2x paired with the physics
+# agreeing, >= 1.8x at every size with identical results, <= 1.2x flatness, <= 1.3x in the
+# count and in CPU time; just past each bound, or with the physics or identity failing, not met.
+if python3 - "$src/bench" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[1])
+import targets
+def peers(a, b, phys=True):
+    r = lambda x: {"paired": x, "median": x, "best": x, "round_by_round": [x], "physics_ok": phys}
+    return {"peers": {"chute": r(a), "chute_hmr": r(b)}}
+def scaling(sp, same=True, flat=1.2):
+    return {"scaling": {"speedup": {"10,000": {"speedup_mean_core": sp}, "32,000 (chute)": {"speedup_mean_core": 1.9}},
+                        "identical": {"10,000": {"identical": True}, "32,000 (chute)": {"identical": same}},
+                        "flatness": {"small": 10000, "large": 1000000, "ns_small": 20, "ns_large": 20 * flat,
+                                     "ratio_median": flat, "ratio_best": flat}}}
+def contacts(count, time):
+    return {"contacts": {"count_ratio": count, "time_ratio_paired": time, "instructions_linear": 100,
+                         "instructions_mepa_epsd": 100 * count, "time_linear_s": 1e-3, "time_mepa_epsd_s": time * 1e-3}}
+def status(got, row=0):
+    return targets.table(got)[row][2]
+met = lambda s: s.startswith("**met**")
+checks = [met(status(peers(2.0, 3.0))), not met(status(peers(1.99, 3.0))), not met(status(peers(2.5, 2.5, False))),
+          met(status(scaling(1.8))), not met(status(scaling(1.79))), "NOT MET" in status(scaling(2.0, same=False)),
+          met(status(scaling(1.8, flat=1.2), 1)), not met(status(scaling(1.8, flat=1.21), 1)),
+          met(status(contacts(1.3, 1.3))), not met(status(contacts(1.25, 1.31))),
+          "in CPU time: not met" in status(contacts(1.25, 1.31)), len(targets.table({})) == 0]
+sys.exit(0 if all(checks) else 1)
+PY
+then pass=$((pass+1)); echo "ok   targets.py verdicts at the bounds"; else echo "FAIL targets.py verdicts"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -1,0 +1,238 @@
+#!/usr/bin/env python3
+"""Issue 6's four targets, measured in one invocation and judged, with every figure's source.
+
+  python3 bench/targets.py                  # all four, about 15 minutes on the 2-core development VM
+  python3 bench/targets.py --only scaling   # some of them: peers, scaling, contacts (comma-separated)
+  python3 bench/targets.py --quick          # the script end to end in about a minute (small sizes, few
+                                            # steps: the figures then say nothing about the targets)
+
+The targets and how each is measured (by the scripts beside this one, whose logs and JSON files
+stay in OUT):
+
+  1. One thread at least 2x LAMMPS's particle-steps per second on both chute problems (LAMMPS's
+     chute, linear spring-dashpot with history; the same chute with Hertz-Mindlin + rolling).
+     bench/peer_compare.py, runs interleaved and pinned round by round to one core; the ratio
+     is the paired one (median over the rounds of cohdem's rate over LAMMPS's in the same
+     round), and the physics check (kinetic energy, mean flow velocity) must pass.
+  2. Two threads at least 1.8x one thread, with results identical to one thread.
+     bench/scaling.py --per-core on the gas at 10^4, 10^5 and 10^6 particles and on the chute:
+     the two-thread median over the mean of the two cores' one-thread medians (on a VM whose
+     cores differ in speed, an unpinned one-thread run measures where it landed). Identical:
+     the last one- and two-thread runs of each problem end with the same kinetic energies, to
+     every digit.
+  3. Cost per particle-step flat within 20 % from 10^4 to 10^6 particles: the one-thread
+     median rates of the same scaling runs, 10^4 over 10^6.
+  4. MEPA n = 3/2 with EPSD rolling resistance at most 1.3x the linear model, on identical
+     contacts (the force loop of cohdem_bench's BM_Force): counted instructions per contact
+     (bench/contact_instructions.py, callgrind: the same on any machine) and CPU time
+     (bench/micro_table.py, interleaved rounds; the paired median).
+
+Each target is judged on this invocation's figures only: "met" or "not met". Timings on a
+shared VM move from run to run (docs/performance.md quotes several invocations); the JSON
+file OUT/targets.json keeps the figures. Exit status: 0 when every measurement ran (met or
+not), 1 when one failed. Needs build/cohdem and build/cohdem_bench, LAMMPS (bench/install-peers.sh)
+for the first target and valgrind for the fourth. Python 3 standard library only.
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(HERE)
+
+
+def run(cmd, log):
+    """Runs one of the bench scripts, its output into log; returns whether it succeeded."""
+    print(f"  {' '.join(os.path.relpath(c, REPO) if c.startswith(REPO) else c for c in cmd[1:])}", flush=True)
+    t0 = time.time()
+    with open(log, "w") as f:
+        rc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT).returncode
+    print(f"    {'done' if rc == 0 else 'FAILED (rc %d)' % rc} in {time.time() - t0:.0f} s, log {log}", flush=True)
+    return rc == 0
+
+
+def peers(a, out):
+    """Target 1 from peer_compare.py's results.json."""
+    d = os.path.join(out, "peers")
+    cmd = [sys.executable, os.path.join(HERE, "peer_compare.py"), "--problems", "chute,chute_hmr", "--peers", "lammps",
+           "--runs", str(a.runs), "--steps", str(a.steps), "--cohdem", a.cohdem, "--out", d]
+    if a.chute_data:
+        cmd += ["--chute-data", a.chute_data]
+    if not run(cmd, os.path.join(out, "peers.log")):
+        return None
+    res = json.load(open(os.path.join(d, "results.json")))["results"]
+    rows = {}
+    for prob in ("chute", "chute_hmr"):
+        c = res[prob]["codes"]
+        lmp = c["lammps"]
+        rows[prob] = {"paired": lmp["ratio_paired"], "median": lmp["ratio_median"], "best": lmp["ratio_best"],
+                      "round_by_round": [x / y for x, y in zip(c["cohdem"]["rate"], lmp["rate"])],
+                      "cohdem_median": c["cohdem"]["median"], "lammps_median": lmp["median"],
+                      "physics_ok": lmp["physics_ok"], "rel_diff_ke": lmp["rel_diff_ke"], "rel_diff_v": lmp["rel_diff_v"]}
+    return rows
+
+
+def scaling(a, out):
+    """Targets 2 and 3 from scaling.py's scaling.json and its last runs' summaries."""
+    d = os.path.join(out, "scaling")
+    sizes = [a.small, a.mid, a.large]
+    cmd = [sys.executable, os.path.join(HERE, "scaling.py"), "--sizes", ",".join(map(str, sizes)), "--threads", "1,2",
+           "--repeat", str(a.repeat), "--steps", str(a.steps), "--chute", "--per-core", "--cohdem", a.cohdem,
+           "--out", d]
+    if a.chute_data:
+        cmd += ["--chute-data", a.chute_data]
+    if not run(cmd, os.path.join(out, "scaling.log")):
+        return None
+    rows = json.load(open(os.path.join(d, "scaling.json")))["rows"]
+    keys = [(f"p{n}", f"{n:,}") for n in sizes] + [("chute", "32,000 (chute)")]
+    speed, same = {}, {}
+    for key, label in keys:
+        one = next(r for r in rows if r["problem"] == label and r["threads"] == 1)
+        two = next(r for r in rows if r["problem"] == label and r["threads"] == 2)
+        per = two.get("one_thread_per_core") or {"any": one["median_particle_steps_per_s"]}
+        mean = statistics.fmean(per.values())
+        speed[label] = {"two_threads": two["median_particle_steps_per_s"], "one_thread_per_core": per,
+                        "speedup_mean_core": two["median_particle_steps_per_s"] / mean,
+                        "speedup_unpinned": two["median_particle_steps_per_s"] / one["median_particle_steps_per_s"]}
+        # The last run of each thread count (scaling.py keeps each one's output folder).
+        s1, s2 = (json.load(open(os.path.join(d, f"run_{key}_{t}", "summary.json"))) for t in (1, 2))
+        fields = ("steps", "kinetic_energy", "translational_energy", "rotational_energy", "contacts")
+        same[label] = {f: [repr(s1[f]), repr(s2[f])] for f in fields}
+        same[label]["identical"] = all(s1[f] == s2[f] for f in fields)
+    lo = next(r for r in rows if r["problem"] == f"{a.small:,}" and r["threads"] == 1)
+    hi = next(r for r in rows if r["problem"] == f"{a.large:,}" and r["threads"] == 1)
+    flat = {"small": a.small, "large": a.large,
+            "ns_small": 1e9 / lo["median_particle_steps_per_s"], "ns_large": 1e9 / hi["median_particle_steps_per_s"],
+            "ratio_median": lo["median_particle_steps_per_s"] / hi["median_particle_steps_per_s"],
+            "ratio_best": lo["particle_steps_per_s"] / hi["particle_steps_per_s"]}
+    return {"speedup": speed, "identical": same, "flatness": flat}
+
+
+def contacts(a, out):
+    """Target 4 from contact_instructions.py (counts) and micro_table.py (CPU time)."""
+    ci = os.path.join(out, "contact_instructions.json")
+    mt = os.path.join(out, "micro_table.json")
+    ok = run([sys.executable, os.path.join(HERE, "contact_instructions.py"), "--models", "linear,mepa+epsd",
+              "--iters", str(a.iters), "--bench", a.bench, "--json", ci], os.path.join(out, "contact_instructions.log"))
+    ok = run([sys.executable, os.path.join(HERE, "micro_table.py"), "--rounds", str(a.rounds),
+              "--min-time", a.min_time, "--bench", a.bench, "--filters", "BM_Force/linear/,BM_Force/mepa\\+epsd/",
+              "--json", mt], os.path.join(out, "micro_table.log")) and ok
+    if not ok:
+        return None
+    ipc = json.load(open(ci))["instructions_per_contact"]
+    times = json.load(open(mt))["seconds_per_iteration"]
+    lin = next(v for k, v in times.items() if k.startswith("BM_Force/linear/"))
+    mep = next(v for k, v in times.items() if k.startswith("BM_Force/mepa+epsd/"))
+    return {"instructions_linear": ipc["linear"], "instructions_mepa_epsd": ipc["mepa+epsd"],
+            "count_ratio": ipc["mepa+epsd"] / ipc["linear"],
+            "time_linear_s": statistics.median(lin), "time_mepa_epsd_s": statistics.median(mep),
+            "time_ratio_paired": statistics.median(m / l for m, l in zip(mep, lin)),
+            "time_ratio_medians": statistics.median(mep) / statistics.median(lin)}
+
+
+def verdict(ok):
+    return "**met**" if ok else "not met"
+
+
+def table(got):
+    """The targets table from the figures of the measurements that ran: (target, measured, status)
+    rows, each judged against issue 6's bound."""
+    rows = []
+    P = got.get("peers")
+    if P:
+        names = {"chute": "linear chute", "chute_hmr": "Hertz-Mindlin + rolling chute"}
+        meas = "; ".join(f"{names[p]} **{r['paired']:.2f}x** paired (round by round "
+                         f"{min(r['round_by_round']):.2f}-{max(r['round_by_round']):.2f}x; median {r['median']:.2f}x, "
+                         f"best {r['best']:.2f}x), physics {'ok' if r['physics_ok'] else 'DIFFERS'}"
+                         for p, r in P.items())
+        ok = all(r["paired"] >= 2.0 and r["physics_ok"] for r in P.values())
+        rows.append(("1 thread >= 2x LAMMPS on both chutes", meas, verdict(ok)))
+    S = got.get("scaling")
+    if S:
+        sp = S["speedup"]
+        same = [v["identical"] for v in S["identical"].values()]
+        ident = all(same)
+        meas = ("; ".join(f"{k} **{v['speedup_mean_core']:.2f}x**" for k, v in sp.items()) +
+                f" (over the mean core's one-thread median); final state identical on {sum(same)} of {len(same)} problems")
+        ok = ident and all(v["speedup_mean_core"] >= 1.8 for v in sp.values())
+        status = verdict(ok)
+        if not ok:
+            met = [k for k, v in sp.items() if v["speedup_mean_core"] >= 1.8]
+            status += f" (identical: {'met' if ident else 'NOT MET'}; 1.8x at {', '.join(met) if met else 'no size'})"
+        rows.append(("2 threads >= 1.8x 1 thread, identical results", meas, status))
+        F = S["flatness"]
+        meas = (f"{F['large']:,} over {F['small']:,} on one thread: **{F['ratio_median']:.2f}x** median, "
+                f"{F['ratio_best']:.2f}x best ({F['ns_large']:.0f} against {F['ns_small']:.0f} ns per particle-step)")
+        rows.append(("cost per particle-step flat within 20 % (10^4 to 10^6)", meas, verdict(F["ratio_median"] <= 1.2)))
+    C = got.get("contacts")
+    if C:
+        meas = (f"counted **{C['count_ratio']:.3f}x** ({C['instructions_mepa_epsd']:.1f} against "
+                f"{C['instructions_linear']:.1f} instructions per contact); CPU time **{C['time_ratio_paired']:.2f}x** "
+                f"paired ({C['time_mepa_epsd_s'] * 1e3:.2f} against {C['time_linear_s'] * 1e3:.2f} ms per force call)")
+        count_ok, time_ok = C["count_ratio"] <= 1.3, C["time_ratio_paired"] <= 1.3
+        status = verdict(count_ok and time_ok)
+        if count_ok != time_ok:
+            status += f" (in the count: {'met' if count_ok else 'not met'}; in CPU time: {'met' if time_ok else 'not met'})"
+        rows.append(("MEPA n = 3/2 + rolling <= 1.3x linear", meas, status))
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--only", default="peers,scaling,contacts", help="which measurements (peers, scaling, contacts)")
+    ap.add_argument("--quick", action="store_true", help="small sizes and few steps: checks the script, not the targets")
+    ap.add_argument("--runs", type=int, default=5, help="peer comparison: interleaved rounds")
+    ap.add_argument("--steps", type=int, default=1000, help="steps of every timed run")
+    ap.add_argument("--repeat", type=int, default=3, help="scaling: repeats of each run")
+    ap.add_argument("--small", type=int, default=10000)
+    ap.add_argument("--mid", type=int, default=100000)
+    ap.add_argument("--large", type=int, default=1000000)
+    ap.add_argument("--rounds", type=int, default=7, help="micro-benchmarks: interleaved rounds")
+    ap.add_argument("--min-time", default="0.5", help="micro-benchmarks: --benchmark_min_time, s")
+    ap.add_argument("--iters", type=int, default=6, help="counted force-loop calls (contact_instructions.py)")
+    ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
+    ap.add_argument("--bench", default=os.path.join(REPO, "build", "cohdem_bench"))
+    ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "targets"))
+    ap.add_argument("--chute-data", default=None, help="LAMMPS's data.chute (default: ../shared/peers/lammps-chute/)")
+    a = ap.parse_args()
+    if a.quick:
+        a.runs, a.steps, a.repeat, a.rounds, a.min_time, a.iters = 1, 5, 1, 1, "0.05", 1
+        a.small, a.mid, a.large = 1000, 2000, 4000
+    only = {w for w in a.only.split(",") if w}
+    unknown = only - {"peers", "scaling", "contacts"}
+    if unknown:
+        sys.exit(f"--only: unknown {', '.join(sorted(unknown))} (peers, scaling, contacts)")
+    if not a.small < a.mid < a.large:
+        sys.exit("--small < --mid < --large is required")
+    out = os.path.abspath(a.out)
+    os.makedirs(out, exist_ok=True)
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    rev = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    print(f"issue 6's targets, {when}, engine {rev or '?'}{' (--quick: the figures say nothing)' if a.quick else ''}",
+          flush=True)
+    got, failed = {}, []
+    for name, fn in (("peers", peers), ("scaling", scaling), ("contacts", contacts)):
+        if name in only:
+            got[name] = fn(a, out)
+            if got[name] is None:
+                failed.append(name)
+
+    rows = table(got)
+    print(f"\n| target | measured ({when}, engine {rev or '?'}) | status |\n|---|---|---|")
+    for t, m, s in rows:
+        print(f"| {t} | {m} | {s} |")
+    for name in failed:
+        print(f"\n{name}: the measurement FAILED (its log is in {out})")
+    with open(os.path.join(out, "targets.json"), "w") as f:
+        json.dump({"when": when, "engine": rev, "args": vars(a), "figures": got,
+                   "table": [{"target": t, "measured": m, "status": s} for t, m, s in rows]}, f, indent=1)
+    print(f"\nfigures and logs in {out} (targets.json)")
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
