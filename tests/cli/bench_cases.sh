@@ -106,8 +106,8 @@ fi
 # scaling.py end to end (a 1000-sphere gas, 3 steps, 1 and 2 threads, --ceiling's two
 # one-thread runs at once and --per-core's one-thread runs pinned to each core): a row per
 # thread count, positive rates and bytes per particle, the two runs' summed rate recorded
-# against the one-thread run, and a one-thread rate per core (the first two this process
-# may use).
+# against the one-thread run, a one-thread rate per core (the first two this process may
+# use), and no run folder left holding its final checkpoint.
 if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat 1 --ceiling --per-core --cohdem "$bin" \
      --out "$work/sc" > "$work/sc.log" 2>&1 &&
    python3 -c "
@@ -119,6 +119,8 @@ ok = ok and c is not None and len(c) == 1 and math.isfinite(c[0]) and c[0] > 0
 per = rows[1].get('one_thread_per_core', {})
 cores = sorted(os.sched_getaffinity(0))[:2]
 ok = ok and sorted(map(int, per)) == cores and all(math.isfinite(v) and v > 0 for v in per.values())
+runs = [d for d in os.listdir('$work/sc') if d.startswith('run_')]
+ok = ok and len(runs) == 4 + len(cores) and not any(os.path.exists(os.path.join('$work/sc', d, 'checkpoint.bin')) for d in runs)
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
 # peer_compare.py's pinning without peers (cohdem alone, the chute, 2 rounds of 3 steps):
 # round r ran on core r mod (cores this process may use), recorded per run; each run's peak
