@@ -170,6 +170,9 @@ def main():
             for row in rows:
                 if row["problem"] == label and row["threads"] == 2:
                     row["one_thread_per_core"] = dict(zip(map(str, cores), per))
+                    row["speedup_mean_core"] = two / mean
+                    if key in pair:  # --ceiling on the same scale: two independent runs at once
+                        row["ceiling_mean_core"] = statistics.median(pair[key]) / mean
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):

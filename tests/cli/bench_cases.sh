@@ -119,6 +119,9 @@ ok = ok and c is not None and len(c) == 1 and math.isfinite(c[0]) and c[0] > 0
 per = rows[1].get('one_thread_per_core', {})
 cores = sorted(os.sched_getaffinity(0))[:2]
 ok = ok and sorted(map(int, per)) == cores and all(math.isfinite(v) and v > 0 for v in per.values())
+mean = sum(per.values()) / len(per)
+ok = ok and abs(rows[1]['speedup_mean_core'] - rows[1]['median_particle_steps_per_s'] / mean) < 1e-9 * rows[1]['speedup_mean_core']
+ok = ok and abs(rows[1]['ceiling_mean_core'] - c[0] / mean) < 1e-9 * rows[1]['ceiling_mean_core']
 runs = [d for d in os.listdir('$work/sc') if d.startswith('run_')]
 ok = ok and len(runs) == 4 + len(cores) and not any(os.path.exists(os.path.join('$work/sc', d, 'checkpoint.bin')) for d in runs)
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
