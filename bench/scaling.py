@@ -29,11 +29,20 @@ cores of a virtual machine need not be equally fast (on the development VM one c
 either), so a two-thread speed-up over "the" one-thread rate depends on where that run
 landed. The table then adds, for two threads: the speed-up over the mean of the cores'
 one-thread medians (on equal cores, the usual speed-up) and over the fastest core's, and the
-efficiency, the two-thread median over the sum of the cores' one-thread medians. Python 3
+efficiency, the two-thread median over the sum of the cores' one-thread medians.
+
+--lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
+once per repeat, with bench/peers/in.packing on the same data file and for the same number of
+steps: what the best-known peer's cost per particle-step does from size to size on this
+machine, beside cohdem's. With --per-core, repeat r's LAMMPS run is pinned to core r mod 2 and
+paired with cohdem's one-thread run on that core in the same repeat; without it, both are
+unpinned. The physics of the last runs is compared as bench/peer_compare.py compares its
+packing (translational kinetic energy, mean vertical velocity; same tolerance). Python 3
 stdlib only.
 """
 import argparse
 import json
+import shutil
 import statistics
 import os
 import subprocess
@@ -41,6 +50,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import peer_compare as pc  # noqa: E402  (its run, parse and physics tolerance for the peer runs)
 
 
 def main():
@@ -56,16 +67,23 @@ def main():
                     help="also run two independent one-thread runs at once: what two cores give here")
     ap.add_argument("--per-core", action="store_true",
                     help="also run one thread pinned to each core: speed-ups over the mean and the fastest core")
+    ap.add_argument("--lammps", action="store_true",
+                    help="also run LAMMPS (lmp, one rank) on every size of the gas, once per repeat")
     ap.add_argument("--chute-data", default=os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute"))
     a = ap.parse_args()
     sizes = [int(float(x)) for x in a.sizes.split(",")]
     threads = [int(x) for x in a.threads.split(",")]
+    if a.lammps and (1 not in threads or not shutil.which("lmp")):
+        sys.exit("--lammps needs 1 among --threads (its runs are set against cohdem's one-thread runs) and "
+                 "LAMMPS's lmp on the PATH (bench/install-peers.sh)")
     os.makedirs(a.out, exist_ok=True)
     for n in sizes:
         data, case = os.path.join(a.out, f"p{n}.data"), os.path.join(a.out, f"p{n}.toml")
         # The particles in a CSV file beside the case ([[particles]]): loaded in a fraction of
-        # the time and memory of one TOML table each (an older folder's case is redone).
-        if not os.path.exists(case) or not os.path.exists(os.path.join(a.out, f"p{n}.grain.csv")):
+        # the time and memory of one TOML table each (an older folder's case is redone). LAMMPS
+        # reads the data file itself.
+        if (not os.path.exists(case) or not os.path.exists(os.path.join(a.out, f"p{n}.grain.csv"))
+                or (a.lammps and not os.path.exists(data))):
             subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(n), data, "--spacing", "1.01"],
                            check=True, stdout=subprocess.DEVNULL)
             subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), data,
@@ -93,6 +111,25 @@ def main():
                 os.remove(os.path.join(out, f))
         return json.load(open(os.path.join(out, "summary.json")))
 
+    lmp_dir = os.path.join(a.out, "lammps")
+    if a.lammps:
+        os.makedirs(lmp_dir, exist_ok=True)
+        shutil.copy(os.path.join(HERE, "peers", "in.packing"), lmp_dir)
+    lmp = {}  # gas key -> one record per repeat
+
+    def lammps_run(key, label, r):
+        """LAMMPS on the gas `key` in repeat r, beside cohdem's one-thread run of that repeat
+        (the run pinned to the same core with --per-core)."""
+        cpu = cores[r % len(cores)] if cores else None
+        text, rss = pc.sh(["lmp", "-var", "nsteps", str(a.steps), "-var", "data", os.path.abspath(os.path.join(a.out, f"{key}.data")),
+                           "-in", "in.packing", "-log", "none"], lmp_dir, os.path.join(lmp_dir, f"{key}.{r + 1}.log"), cpu)
+        rate, ke, ke_rot, vz = pc.parse_peer(text, a.steps)
+        ours = allr[(key, f"core{cpu}") if cpu is not None else (key, 1)][-1]
+        lmp.setdefault(key, []).append({"rate": rate, "cohdem_rate": ours, "cpu": cpu, "peak_rss_bytes": rss,
+                                        "particles": pc.peer_loop(text)[2], "ke": ke, "ke_rot": ke_rot, "vz": vz})
+        where = f" on core {cpu}" if cpu is not None else ""
+        print(f"  run {r + 1}: {label:>16s}, LAMMPS{where}: {rate:10.4g} particle-steps/s (cohdem {ours:.4g})", flush=True)
+
     best, allr, pair = {}, {}, {}
     for r in range(a.repeat):
         for key, label, case in probs:
@@ -113,6 +150,8 @@ def main():
                 rate = summary(out)["particle_steps_per_s"]
                 allr.setdefault((key, f"core{cpu}"), []).append(rate)
                 print(f"  run {r + 1}: {label:>16s}, 1 thread on core {cpu}: {rate:10.4g} particle-steps/s", flush=True)
+            if a.lammps and key != "chute":
+                lammps_run(key, label, r)
             if a.ceiling:
                 outs = [os.path.join(a.out, f"run_{key}_pair{q}") for q in (0, 1)]
                 procs = [subprocess.Popen(cmd(case, 1, o), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -180,8 +219,50 @@ def main():
         print(f"\ncost per particle-step, 10^6 over 10^4 ({threads[0]} thread(s)): "
               f"{statistics.median(allr[lo]) / statistics.median(allr[hi]):.2f}x median, "
               f"{max(allr[lo]) / max(allr[hi]):.2f}x best (target <= 1.20x)")
+    peer = lammps_table(a, probs, lmp) if a.lammps else None
     with open(os.path.join(a.out, "scaling.json"), "w") as f:
-        json.dump({"steps": a.steps, "repeat": a.repeat, "rows": rows}, f, indent=1)
+        json.dump({"steps": a.steps, "repeat": a.repeat, "rows": rows, "lammps": peer}, f, indent=1)
+
+
+def lammps_table(a, probs, lmp):
+    """--lammps: LAMMPS's rates on the gases beside cohdem's one-thread rates of the same repeats,
+    the physics of the last runs, and both codes' 10^6-over-10^4 cost ratio."""
+    tol = pc.problem_table()["packing"].physics_tol
+    pinned = any(x["cpu"] is not None for v in lmp.values() for x in v)
+    print(f"\nLAMMPS on the same gases (one rank, the same data files and steps; "
+          f"{'pinned, repeat r on core r mod 2, against cohdem on that core in that repeat' if pinned else 'unpinned'})")
+    print("| particles | LAMMPS particle-steps/s (median) | ns per particle-step, LAMMPS | cohdem (one thread) | "
+          "cohdem / LAMMPS (paired) | LAMMPS bytes per particle | physics (last runs) |")
+    print("|---:|---:|---:|---:|---:|---:|---|")
+    out = {}
+    for key, label, _ in probs:
+        if key not in lmp:
+            continue
+        R = lmp[key]
+        med = statistics.median(x["rate"] for x in R)
+        ours = statistics.median(x["cohdem_rate"] for x in R)
+        paired = statistics.median(x["cohdem_rate"] / x["rate"] for x in R)
+        # cohdem's last one-thread run of this size (every run of a size ends in the same state)
+        j = json.load(open(os.path.join(a.out, f"run_{key}_1", "summary.json")))
+        last = R[-1]
+        dke = abs(j["translational_energy"] - last["ke"]) / abs(last["ke"])
+        dv = abs(j["mean_velocity"][2] - last["vz"]) / max(abs(last["vz"]), 1e-12)
+        ok = dke <= tol and dv <= tol
+        bpp = statistics.median(x["peak_rss_bytes"] for x in R) / last["particles"]
+        print(f"| {label} | {med:.3g} | {1e9 / med:.0f} | {1e9 / ours:.0f} ns | {paired:.2f}x | {bpp:.0f} | "
+              f"dKE {dke:.1e}, dv {dv:.1e}: {'ok' if ok else 'DIFFERS'} (tol {tol:g}) |")
+        out[key] = {"particles": last["particles"], "runs": R, "lammps_median": med, "cohdem_median": ours,
+                    "ratio_paired": paired, "lammps_bytes_per_particle": bpp, "rel_diff_ke": dke, "rel_diff_v": dv,
+                    "physics_ok": ok}
+    gases = sorted(out, key=lambda k: out[k]["particles"])
+    if len(gases) > 1:  # the largest gas over the smallest (issue 6: 10^6 over 10^4)
+        small, large = out[gases[0]], out[gases[-1]]
+        f_l = small["lammps_median"] / large["lammps_median"]
+        f_c = small["cohdem_median"] / large["cohdem_median"]
+        print(f"\ncost per particle-step, {large['particles']:,} over {small['particles']:,} particles, in the same "
+              f"repeats: LAMMPS {f_l:.2f}x, cohdem {f_c:.2f}x (medians)")
+        out["flatness"] = {"small": small["particles"], "large": large["particles"], "lammps": f_l, "cohdem": f_c}
+    return out
 
 
 if __name__ == "__main__":

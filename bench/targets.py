@@ -23,7 +23,10 @@ stay in OUT):
      the last one- and two-thread runs of each problem end with the same kinetic energies, to
      every digit.
   3. Cost per particle-step flat within 20 % from 10^4 to 10^6 particles: the one-thread
-     median rates of the same scaling runs, 10^4 over 10^6.
+     median rates of the same scaling runs, 10^4 over 10^6. Where LAMMPS is installed, the
+     scaling runs also time it on the same gases (scaling.py --lammps): its own 10^6-over-10^4
+     ratio on this machine, and cohdem's lead at each size, go beside the verdict (the verdict
+     is cohdem's alone).
   4. MEPA n = 3/2 with EPSD rolling resistance at most 1.3x the linear model, on identical
      contacts (the force loop of cohdem_bench's BM_Force): counted instructions per contact
      (bench/contact_instructions.py, callgrind: the same on any machine) and CPU time
@@ -38,6 +41,7 @@ for the first target and valgrind for the fourth. Python 3 standard library only
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -87,9 +91,12 @@ def scaling(a, out):
            "--out", d]
     if a.chute_data:
         cmd += ["--chute-data", a.chute_data]
+    if shutil.which("lmp"):
+        cmd += ["--lammps"]
     if not run(cmd, os.path.join(out, "scaling.log")):
         return None
-    rows = json.load(open(os.path.join(d, "scaling.json")))["rows"]
+    js = json.load(open(os.path.join(d, "scaling.json")))
+    rows = js["rows"]
     keys = [(f"p{n}", f"{n:,}") for n in sizes] + [("chute", "32,000 (chute)")]
     speed, same = {}, {}
     for key, label in keys:
@@ -111,6 +118,13 @@ def scaling(a, out):
             "ns_small": 1e9 / lo["median_particle_steps_per_s"], "ns_large": 1e9 / hi["median_particle_steps_per_s"],
             "ratio_median": lo["median_particle_steps_per_s"] / hi["median_particle_steps_per_s"],
             "ratio_best": lo["particle_steps_per_s"] / hi["particle_steps_per_s"]}
+    L = js.get("lammps")
+    if L and "flatness" in L:  # LAMMPS on the same gases, in the same repeats
+        small, large = L[f"p{a.small}"], L[f"p{a.large}"]
+        flat["lammps"] = {"ratio_median": L["flatness"]["lammps"], "ns_small": 1e9 / small["lammps_median"],
+                          "ns_large": 1e9 / large["lammps_median"], "lead_small": small["ratio_paired"],
+                          "lead_large": large["ratio_paired"],
+                          "physics_ok": all(v["physics_ok"] for k, v in L.items() if k != "flatness")}
     return {"speedup": speed, "identical": same, "flatness": flat}
 
 
@@ -176,6 +190,11 @@ def table(got):
         F = S["flatness"]
         meas = (f"{F['large']:,} over {F['small']:,} on one thread: **{F['ratio_median']:.2f}x** median, "
                 f"{F['ratio_best']:.2f}x best ({F['ns_large']:.0f} against {F['ns_small']:.0f} ns per particle-step)")
+        FL = F.get("lammps")
+        if FL:
+            meas += (f"; LAMMPS on the same gases in the same repeats {FL['ratio_median']:.2f}x ({FL['ns_large']:.0f} "
+                     f"against {FL['ns_small']:.0f} ns), cohdem {FL['lead_small']:.2f}x / {FL['lead_large']:.2f}x as fast "
+                     f"(paired), physics {'ok' if FL['physics_ok'] else 'DIFFERS'}")
         rows.append(("cost per particle-step flat within 20 % (10^4 to 10^6)", meas, verdict(F["ratio_median"] <= 1.2)))
     C = got.get("contacts")
     if C:

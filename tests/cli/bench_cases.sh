@@ -6,7 +6,8 @@
 # contact_instructions.py the force loop's instructions per contact of two laws,
 # scaling.py gives its table for a small gas (with --ceiling and --per-core),
 # peer_compare.py pins its rounds to the cores, and targets.py measures and judges issue 6's
-# targets (its --quick run, and its verdicts on figures at the bounds).
+# targets (its --quick run, with scaling.py --lammps through a stand-in lmp, and its verdicts
+# on figures at the bounds).
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
 set -u
@@ -167,13 +168,31 @@ sys.exit(0 if ok else 1)
 PY
 then pass=$((pass+1)); echo "ok   peer_compare.py: MPI ranks' memory summed"; else echo "FAIL peer_compare.py MPI ranks' memory"; fail=$((fail+1)); fi
 # targets.py end to end (--quick: a 1000/2000/4000-sphere gas and the chute, 5 steps; the
-# force-loop counts and times of two laws; no LAMMPS in CI, so no peer comparison): the table
-# has its three rows, every problem's two-thread run ended as the one-thread run did (the
-# thread-identity target, checked on the runs' own final energies), and the counted MEPA +
-# EPSD law costs more than the linear one.
+# force-loop counts and times of two laws; no peer comparison): the table has its three rows,
+# every problem's two-thread run ended as the one-thread run did (the thread-identity target,
+# checked on the runs' own final energies), and the counted MEPA + EPSD law costs more than
+# the linear one. Its scaling runs time LAMMPS on the same gases (scaling.py --lammps) through
+# a stand-in `lmp` first on the PATH (CI has no LAMMPS), whose loop time is set so that it runs
+# 1e8 / (1 + N / 1000) particle-steps/s, 20 ns per particle-step at 1000 spheres and 50 at
+# 4000, and whose final energy is wrong: its 4000-over-1000 ratio must come out 2.5x, cohdem's
+# lead the rates' quotient, and the physics check must fail.
+mkdir -p "$work/stub"
+cat > "$work/stub/lmp" <<'PY'
+#!/usr/bin/env python3
+import re, sys
+a = sys.argv[1:]
+var = {a[i + 1]: a[i + 2] for i, x in enumerate(a) if x == "-var"}
+n = int(var["nsteps"])
+m = int(re.search(r"(\d+)\s+atoms", open(var["data"]).read()).group(1))
+print("   Step   Atoms   KinEng   c_1   v_vz")
+print(f"  0 {m} 1 0 0")
+print(f"  {n} {m} 1.0 0.5 -1.0")
+print(f"Loop time of {m * n / (1e8 / (1 + m / 1000)):.15g} on 1 procs for {n} steps with {m} atoms")
+PY
+chmod +x "$work/stub/lmp"
 if [ -x "$bench_bin" ]; then tg_only=scaling,contacts; tg_rows=3; else tg_only=scaling; tg_rows=2; fi
-if python3 "$src/bench/targets.py" --quick --only "$tg_only" --cohdem "$bin" --bench "$bench_bin" --chute-data "$data" \
-     --out "$work/tg" > "$work/tg.log" 2>&1 &&
+if PATH="$work/stub:$PATH" python3 "$src/bench/targets.py" --quick --only "$tg_only" --cohdem "$bin" --bench "$bench_bin" \
+     --chute-data "$data" --out "$work/tg" > "$work/tg.log" 2>&1 &&
    python3 -c "
 import json, sys
 t = json.load(open('$work/tg/targets.json'))
@@ -182,11 +201,17 @@ ok = len(t['table']) == $tg_rows and len(S['identical']) == 4 and all(v['identic
 ok = ok and all(v['ceiling_mean_core'] > 0 for v in S['speedup'].values())
 C = t['figures'].get('contacts')
 ok = ok and (C is None or 1.0 < C['count_ratio'] < 3.0)
-sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   targets.py --quick"; else echo "FAIL targets.py --quick"; tail -5 "$work/tg.log"; fail=$((fail+1)); fi
+L, FL = json.load(open('$work/tg/scaling/scaling.json'))['lammps'], S['flatness']['lammps']
+close = lambda x, y: abs(x - y) <= 1e-9 * abs(y)
+ok = ok and close(FL['ratio_median'], 2.5) and close(FL['ns_small'], 20) and close(FL['ns_large'], 50)
+ok = ok and close(FL['lead_small'], L['p1000']['runs'][0]['cohdem_rate'] / 5e7) and not FL['physics_ok']
+ok = ok and 'LAMMPS on the same gases in the same repeats 2.50x' in t['table'][1]['measured']
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   targets.py --quick (LAMMPS stand-in)"; else echo "FAIL targets.py --quick"; tail -5 "$work/tg.log"; fail=$((fail+1)); fi
 # targets.py's verdicts at the bounds (figures made up): >= 2x paired with the physics
 # agreeing, >= 1.8x at every size with identical results, <= 1.2x flatness, <= 1.3x in the
 # count and in CPU time; just past each bound, or with the physics or identity failing, not met;
-# a size missed where two independent runs also stayed below 1.8x is named as such.
+# a size missed where two independent runs also stayed below 1.8x is named as such; LAMMPS's
+# own flatness, shown beside the verdict, does not change it.
 if python3 - "$src/bench" <<'PY'
 import sys
 sys.path.insert(0, sys.argv[1])
@@ -212,6 +237,15 @@ checks = [met(status(peers(2.0, 3.0))), not met(status(peers(1.99, 3.0))), not m
           met(status(scaling(1.8, flat=1.2), 1)), not met(status(scaling(1.8, flat=1.21), 1)),
           met(status(contacts(1.3, 1.3))), not met(status(contacts(1.25, 1.31))),
           "in CPU time: not met" in status(contacts(1.25, 1.31)), len(targets.table({})) == 0]
+# LAMMPS's figures beside the flatness verdict do not move it: cohdem's 1.21x stays not met
+# with a flat LAMMPS, 1.2x met with a steep one.
+def with_lammps(flat, lmp):
+    g = scaling(1.8, flat=flat)
+    g["scaling"]["flatness"]["lammps"] = {"ratio_median": lmp, "ns_small": 40, "ns_large": 40 * lmp,
+                                          "lead_small": 2.0, "lead_large": 2.0, "physics_ok": True}
+    return g
+checks += [not met(status(with_lammps(1.21, 1.0), 1)), met(status(with_lammps(1.2, 2.9), 1)),
+           "LAMMPS on the same gases in the same repeats 2.90x" in targets.table(with_lammps(1.2, 2.9))[1][1]]
 sys.exit(0 if all(checks) else 1)
 PY
 then pass=$((pass+1)); echo "ok   targets.py verdicts at the bounds"; else echo "FAIL targets.py verdicts"; fail=$((fail+1)); fi
