@@ -307,11 +307,11 @@ LANES_FN L3 spring4(L3& fs, const L3& vt, const V4 kt, const V4 dt, const V4 gam
   return ft;
 }
 
-/// TangentialCommon::update with a stiffness record (State::kt_prev): rotation, the spring
-/// scaled by kt/kt_prev where the stiffness fell, then spring4; kt_prev becomes kt.
+/// TangentialCommon::update with a stiffness record (State::kt_prev), after its rotation
+/// (the caller's rotate_into_plane4): the spring scaled by kt/kt_prev where the stiffness
+/// fell, then spring4; kt_prev becomes kt.
 LANES_FN L3 spring_prev4(L3& fs, V4& kt_prev, const L3& n, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t,
                          const V4 mu, const V4 fc) {
-  rotate_into_plane4(fs, n);
   fs = sel3((kt_prev > 0.0) & (kt < kt_prev), fs * (kt / kt_prev), fs);
   kt_prev = kt;
   return spring4(fs, vt, kt, dt, gamma_t, mu, fc);
@@ -332,7 +332,8 @@ LANES_FN void drive(const LaneInput& in, const ScreenHits& hits, const uint32_t 
   }
 }
 
-/// EpsdRolling::apply in lanes: mk is the spring's history; returns the moment on i.
+/// EpsdRolling::apply in lanes: mk is the spring's history, already turned into the new
+/// tangent plane (the caller's rotate_into_plane4); returns the moment on i.
 /// two_eta_r = eta_r * 2.0; damped: eta_r > 0.
 /// EPSD's I_r = Ji Jj / (Ji + Jj), J = I + m r^2; a frozen body adds nothing. The scalar law
 /// tests I = inf, which is the frozen bodies' (a free particle's inertia, 0.4 m r^2, is
@@ -346,7 +347,6 @@ LANES_FN L3 epsd4(const LaneInput& in, const Group& G, L3& mk, const V4 kn, cons
                   const V4 two_eta_r, const M4 damped, const V4 dt, const V4 Ir) {
   const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
-  rotate_into_plane4(mk, G.n);
   const V4 kr = 2.25 * kn * mu_r * mu_r * G.rstar * G.rstar;
   mk = mk - wr * (kr * dt);
   M4 slide;
@@ -495,15 +495,9 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
   auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
   const Par<kU, LP> par(P, G.p);
-  // LinearNormal.
-  const V4 kn = par(&LP::kn);
-  const M4 alive = G.delta > 0.0;
-  const V4 f_el = kn * G.delta;
-  V4 gamma;
-  const V4 fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
-  const V4 fc = max0(fn);  // NormalBase::coulomb_base
-  // LinearTangential: kt fixed per material pair. The records: {fs}, or {fs, mk} read as
-  // {fs, mk.x} and {mk.y, mk.z}.
+  // The records first, and their turns into the new tangent plane: they depend only on the
+  // history and the normal, so the out-of-order window overlaps their divisions with the
+  // laws' chains below. {fs}, or {fs, mk} read as {fs, mk.x} and {mk.y, mk.z}.
   L3 fs, mk;
   if constexpr (kRoll) {
     const Quads h0 = load_quads(H, G.k, 0);
@@ -511,10 +505,18 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
     load_pairs(H, G.k, 4, mk_y, mk_z);
     fs = L3{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
     mk = L3{V4(h0.q[3]), mk_y, mk_z};
+    rotate_into_plane4(mk, G.n);
   } else {
     fs = gather3(H, G.k, &LH::fs);
   }
   rotate_into_plane4(fs, G.n);
+  // LinearNormal.
+  const V4 kn = par(&LP::kn);
+  const M4 alive = G.delta > 0.0;
+  const V4 f_el = kn * G.delta;
+  V4 gamma;
+  const V4 fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
+  const V4 fc = max0(fn);  // NormalBase::coulomb_base
   const L3 ft = spring4(fs, G.vt, par(&LP::kt), splat(in.dt), par(&LP::damp_t) * gamma,
                         par(&LP::mu), fc);
   // LinearNormal's contact radius, read only when asked for.
@@ -522,7 +524,7 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
   // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
   if constexpr (kRoll) {
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                        par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
+                              par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
   } else {
@@ -550,6 +552,18 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
   using LP = HertzLaneParams;
   const Par<kU, LP> par(P, G.p);
   const V4 dt = splat(in.dt);
+  // The records first, read whole as they are written below ({fs, kt_prev} at 0 and, with
+  // rolling, {kt_prev, mk} at 24), and turned into the new tangent plane (see linear_group).
+  const Quads h0 = load_quads(H, G.k, 0);
+  L3 fs{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
+  V4 kt_prev = V4(h0.q[3]);
+  rotate_into_plane4(fs, G.n);
+  L3 mk{};
+  if constexpr (kRoll) {
+    const Quads h1 = load_quads(H, G.k, 3);
+    mk = L3{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
+    rotate_into_plane4(mk, G.n);
+  }
   // HertzNormal (the lanes of ended contacts compute what no one reads).
   const M4 alive = G.delta > 0.0;
   const V4 a = sqrt4(G.rstar * G.delta);
@@ -559,21 +573,14 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
   const V4 fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
   const V4 fc = max0(fn);
   // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
-  // The records read whole, as they are written below: {fs, kt_prev} at 0 and, with
-  // rolling, {kt_prev, mk} at 24.
   const V4 kt = par(&LP::eight_Gstar) * a;
-  const Quads h0 = load_quads(H, G.k, 0);
-  L3 fs{V4(h0.q[0]), V4(h0.q[1]), V4(h0.q[2])};
-  V4 kt_prev = V4(h0.q[3]);
   const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::damp_kt) * gamma,
                              par(&LP::mu), fc);
   // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
   if constexpr (kRoll) {
-    const Quads h1 = load_quads(H, G.k, 3);
-    L3 mk{V4(h1.q[1]), V4(h1.q[2]), V4(h1.q[3])};
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                        par(&LP::damped), dt, rolling_inertia4(in, G));
+                              par(&LP::damped), dt, rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
@@ -594,11 +601,20 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   using LP = MepaLaneParams;
   const Par<kU, LP> par(P, G.p);
   const V4 dt = splat(in.dt);
-  // The records are read where each part is first used (fewer values held across the
-  // group): {Dmax, Dp} at 0, {fs, kt_prev} at 24 and, with rolling, mk at 56.
-  // EPSD's I_r first: its loads and its division overlap the normal law's square root.
+  // The springs' records first, {fs, kt_prev} at 24 and, with rolling, mk at 56, turned into
+  // the new tangent plane (see linear_group), and EPSD's I_r: their divisions overlap the
+  // normal law's square root. {Dmax, Dp} at 0 where the normal law reads it.
   V4 Ir{};
-  if constexpr (kRoll) Ir = rolling_inertia4(in, G);
+  L3 mk{};
+  const Quads h1 = load_quads(H, G.k, 3);
+  L3 fs{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
+  V4 kt_prev = V4(h1.q[3]);
+  rotate_into_plane4(fs, G.n);
+  if constexpr (kRoll) {
+    mk = gather3(H, G.k, &LH::mk);
+    rotate_into_plane4(mk, G.n);
+    Ir = rolling_inertia4(in, G);
+  }
   V4 Dmax, Dp;
   load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
@@ -627,9 +643,6 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 fc = max0(sel(par(&LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
   const V4 kt = sel(par(&LP::kt_const), par(&LP::kt_c), par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
-  const Quads h1 = load_quads(H, G.k, 3);
-  L3 fs{V4(h1.q[0]), V4(h1.q[1]), V4(h1.q[2])};
-  V4 kt_prev = V4(h1.q[3]);
   const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
   const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
@@ -641,7 +654,6 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
     // {Dmax, Dp, branch, fs.x} at 0 and {fs.y, fs.z} at 32 now, {kt_prev, mk} at 48 after
     // the rolling.
     store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V4(br), fs.x)}, At<Pairs>{4, pairs(fs.y, fs.z)});
-    L3 mk = gather3(H, G.k, &LH::mk);
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped), dt, Ir);
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{6, quads(kt_prev, mk.x, mk.y, mk.z)});
