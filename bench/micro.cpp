@@ -4,6 +4,11 @@
 //   ./build/cohdem_bench                       # all
 //   ./build/cohdem_bench --benchmark_filter=Force
 //
+// BM_ForceAlternate/A/B alternates two laws' force loops in one process and reports the
+// ratio of their CPU times paired block by block (issue 6's MEPA-over-linear bound; a law
+// against itself is the control):
+//   ./build/cohdem_bench --benchmark_filter=BM_ForceAlternate/ --benchmark_repetitions=3
+//
 // Every benchmark reports items_per_second = particle-steps per second of the part it times
 // (particles handled per second), so the numbers add up like costs per particle-step.
 //
@@ -13,11 +18,14 @@
 // random velocities and spins, so tangential and rolling histories are loaded.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -116,6 +124,81 @@ void BM_Force(benchmark::State& st, ModelCase mc) {
   st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
   st.counters["contacts_per_particle"] = double(s->pair_contact_count()) / double(s->particles.size());
   st.counters["particles"] = double(s->particles.size());
+}
+
+/// One model's lattice, lists and force context, for BM_ForceAlternate.
+struct ForceLoop {
+  std::unique_ptr<System> s;
+  std::vector<PairResult> pr, rev;
+  std::vector<Vec3> fw, tww, cw;
+  std::unique_ptr<ForceContext> ctx;
+  ForceLoop(const int n, const ModelCase mc) : s(lattice(n, mc.model, mc.rolling)) {
+    s->prepare();
+    s->run(5);  // load the histories, as BM_Force
+    pr.resize(s->nl.pair_count());
+    rev.resize(s->particles.size());
+    ctx = std::make_unique<ForceContext>(
+        ForceContext{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, rev, fw, tww, cw});
+    ctx->keep_pair = false;
+  }
+  /// One force call; returns its thread CPU time, s.
+  double call() {
+    timespec t0, t1;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+    s->model->compute(*ctx);
+    benchmark::DoNotOptimize(s->particles.force.data());
+    benchmark::ClobberMemory();
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+    return double(t1.tv_sec - t0.tv_sec) + 1e-9 * double(t1.tv_nsec - t0.tv_nsec);
+  }
+};
+
+/// Two models' force loops (BM_Force's lattice) alternated in one process, in blocks of a few
+/// calls each: the ratio of their costs on a shared machine, where the host's load drifts
+/// over seconds and separate runs (micro_table.py's rounds) pair badly. Each iteration is one
+/// block of A then one of B; a block's first call, the one that brings its data back into
+/// the caches, is not timed (a run calls the same loop step after step). Counters: ratio =
+/// the median over the iterations of B's CPU time per call over A's in the same iteration
+/// (ratio_q1, ratio_q3: its quartiles); a_ms, b_ms: the median CPU time per call.
+void BM_ForceAlternate(benchmark::State& st, ModelCase a, ModelCase b) {
+  const int n = int(st.range(0));
+  std::unique_ptr<ForceLoop> A, B;
+  try {
+    A = std::make_unique<ForceLoop>(n, a);
+    B = std::make_unique<ForceLoop>(n, b);
+  } catch (const std::exception& e) {
+    st.SkipWithError(e.what());
+    return;
+  }
+  constexpr int kBlock = 4;  // calls per block, the first untimed
+  std::vector<double> ratio, ta, tb;
+  for (auto _ : st) {
+    double sa = 0, sb = 0;
+    for (int c = 0; c < kBlock; ++c) {
+      const double t = A->call();
+      if (c > 0) sa += t;
+    }
+    for (int c = 0; c < kBlock; ++c) {
+      const double t = B->call();
+      if (c > 0) sb += t;
+    }
+    ratio.push_back(sb / sa);
+    ta.push_back(sa / (kBlock - 1));
+    tb.push_back(sb / (kBlock - 1));
+  }
+  auto quantile = [](std::vector<double> v, const double q) {
+    std::sort(v.begin(), v.end());
+    const double x = q * double(v.size() - 1);
+    const size_t i = size_t(x);
+    return i + 1 < v.size() ? v[i] + (x - double(i)) * (v[i + 1] - v[i]) : v.back();
+  };
+  if (ratio.empty()) return;
+  st.counters["ratio"] = quantile(ratio, 0.5);
+  st.counters["ratio_q1"] = quantile(ratio, 0.25);
+  st.counters["ratio_q3"] = quantile(ratio, 0.75);
+  st.counters["a_ms"] = 1e3 * quantile(ta, 0.5);
+  st.counters["b_ms"] = 1e3 * quantile(tb, 0.5);
+  st.counters["blocks"] = double(ratio.size());
 }
 
 /// A whole step (integration, rebuild check, forces) on the lattice.
@@ -241,6 +324,17 @@ void register_all() {
     const std::string tag = std::string(c.model) + (std::string(c.rolling) == "none" ? "" : "+" + std::string(c.rolling));
     iters(benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c))->Arg(32)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
+  }
+  // Issue 6's fourth target: MEPA n = 3/2 + EPSD against the plain linear law; each law
+  // against a second lattice of itself is the method's control (its ratio must be 1).
+  for (const auto& [a, b] : {std::pair{ModelCase{"linear", "none"}, ModelCase{"mepa", "epsd"}},
+                             std::pair{ModelCase{"linear", "none"}, ModelCase{"linear", "none"}},
+                             std::pair{ModelCase{"mepa", "epsd"}, ModelCase{"mepa", "epsd"}}}) {
+    const auto tag = [](const ModelCase& m) {
+      return std::string(m.model) + (std::string(m.rolling) == "none" ? "" : "+" + std::string(m.rolling));
+    };
+    iters(benchmark::RegisterBenchmark(("BM_ForceAlternate/" + tag(a) + "/" + tag(b)).c_str(), BM_ForceAlternate, a, b))
+        ->Arg(32)->Unit(benchmark::kMillisecond);
   }
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))

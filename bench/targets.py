@@ -28,9 +28,12 @@ stay in OUT):
      ratio on this machine, and cohdem's lead at each size, go beside the verdict (the verdict
      is cohdem's alone).
   4. MEPA n = 3/2 with EPSD rolling resistance at most 1.3x the linear model, on identical
-     contacts (the force loop of cohdem_bench's BM_Force): counted instructions per contact
-     (bench/contact_instructions.py, callgrind: the same on any machine) and CPU time
-     (bench/micro_table.py, interleaved rounds; the paired median).
+     contacts (the force loop of cohdem_bench's BM_Force lattice): counted instructions per
+     contact (bench/contact_instructions.py, callgrind: the same on any machine) and CPU time
+     (cohdem_bench's BM_ForceAlternate: the two force loops alternated in blocks of a few
+     calls inside one process, the ratio paired block by block; the median of its repetitions).
+     Each law alternated with a second lattice of itself is the method's control: its ratio
+     must come out within 3 % of 1, or the CPU-time figure is not trusted (not met).
 
 Each target is judged on this invocation's figures only: "met" or "not met". Timings on a
 shared VM move from run to run (docs/performance.md quotes several invocations); the JSON
@@ -53,7 +56,8 @@ REPO = os.path.dirname(HERE)
 
 def run(cmd, log):
     """Runs one of the bench scripts, its output into log; returns whether it succeeded."""
-    print(f"  {' '.join(os.path.relpath(c, REPO) if c.startswith(REPO) else c for c in cmd[1:])}", flush=True)
+    shown = cmd[1:] if cmd[0] == sys.executable else cmd
+    print(f"  {' '.join(os.path.relpath(c, REPO) if c.startswith(REPO) else c for c in shown)}", flush=True)
     t0 = time.time()
     with open(log, "w") as f:
         rc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT).returncode
@@ -128,26 +132,37 @@ def scaling(a, out):
     return {"speedup": speed, "identical": same, "flatness": flat}
 
 
+CONTROL_TOL = 0.03  # BM_ForceAlternate of a law against itself: within 3 % of 1
+
+
 def contacts(a, out):
-    """Target 4 from contact_instructions.py (counts) and micro_table.py (CPU time)."""
+    """Target 4 from contact_instructions.py (counts) and BM_ForceAlternate (CPU time)."""
     ci = os.path.join(out, "contact_instructions.json")
-    mt = os.path.join(out, "micro_table.json")
+    fa = os.path.join(out, "force_alternate.json")
     ok = run([sys.executable, os.path.join(HERE, "contact_instructions.py"), "--models", "linear,mepa+epsd",
               "--iters", str(a.iters), "--bench", a.bench, "--json", ci], os.path.join(out, "contact_instructions.log"))
-    ok = run([sys.executable, os.path.join(HERE, "micro_table.py"), "--rounds", str(a.rounds),
-              "--min-time", a.min_time, "--bench", a.bench, "--filters", "BM_Force/linear/,BM_Force/mepa\\+epsd/",
-              "--json", mt], os.path.join(out, "micro_table.log")) and ok
+    ok = run([a.bench, "--benchmark_filter=BM_ForceAlternate/", f"--benchmark_min_time={a.min_time}",
+              f"--benchmark_repetitions={a.rounds}", "--benchmark_enable_random_interleaving=true",
+              f"--benchmark_out={fa}"],
+             os.path.join(out, "force_alternate.log")) and ok
     if not ok:
         return None
     ipc = json.load(open(ci))["instructions_per_contact"]
-    times = json.load(open(mt))["seconds_per_iteration"]
-    lin = next(v for k, v in times.items() if k.startswith("BM_Force/linear/"))
-    mep = next(v for k, v in times.items() if k.startswith("BM_Force/mepa+epsd/"))
+    reps = {}  # "a/b" -> the iteration runs (one per repetition)
+    for b in json.load(open(fa))["benchmarks"]:
+        if b.get("run_type", "iteration") == "iteration" and "ratio" in b:
+            reps.setdefault(b["name"].split("/")[1] + "/" + b["name"].split("/")[2], []).append(b)
+    med = lambda key, field: statistics.median(r[field] for r in reps[key])
     return {"instructions_linear": ipc["linear"], "instructions_mepa_epsd": ipc["mepa+epsd"],
             "count_ratio": ipc["mepa+epsd"] / ipc["linear"],
-            "time_linear_s": statistics.median(lin), "time_mepa_epsd_s": statistics.median(mep),
-            "time_ratio_paired": statistics.median(m / l for m, l in zip(mep, lin)),
-            "time_ratio_medians": statistics.median(mep) / statistics.median(lin)}
+            "time_linear_s": med("linear/mepa+epsd", "a_ms") * 1e-3,
+            "time_mepa_epsd_s": med("linear/mepa+epsd", "b_ms") * 1e-3,
+            "time_ratio": med("linear/mepa+epsd", "ratio"),
+            "time_ratio_repetitions": [r["ratio"] for r in reps["linear/mepa+epsd"]],
+            "time_ratio_quartiles": [med("linear/mepa+epsd", "ratio_q1"), med("linear/mepa+epsd", "ratio_q3")],
+            "blocks": sum(int(r["blocks"]) for r in reps["linear/mepa+epsd"]),
+            "control_linear": med("linear/linear", "ratio"),
+            "control_mepa_epsd": med("mepa+epsd/mepa+epsd", "ratio")}
 
 
 def verdict(ok):
@@ -198,10 +213,15 @@ def table(got):
         rows.append(("cost per particle-step flat within 20 % (10^4 to 10^6)", meas, verdict(F["ratio_median"] <= 1.2)))
     C = got.get("contacts")
     if C:
+        controls_ok = all(abs(C[k] - 1.0) <= CONTROL_TOL for k in ("control_linear", "control_mepa_epsd"))
         meas = (f"counted **{C['count_ratio']:.3f}x** ({C['instructions_mepa_epsd']:.1f} against "
-                f"{C['instructions_linear']:.1f} instructions per contact); CPU time **{C['time_ratio_paired']:.2f}x** "
-                f"paired ({C['time_mepa_epsd_s'] * 1e3:.2f} against {C['time_linear_s'] * 1e3:.2f} ms per force call)")
-        count_ok, time_ok = C["count_ratio"] <= 1.3, C["time_ratio_paired"] <= 1.3
+                f"{C['instructions_linear']:.1f} instructions per contact); CPU time **{C['time_ratio']:.3f}x** "
+                f"(the force loops alternated in one process, paired block by block: quartiles "
+                f"{C['time_ratio_quartiles'][0]:.2f}-{C['time_ratio_quartiles'][1]:.2f}x; "
+                f"{C['time_mepa_epsd_s'] * 1e3:.2f} against {C['time_linear_s'] * 1e3:.2f} ms per force call; "
+                f"controls, each law against itself: {C['control_linear']:.3f}, {C['control_mepa_epsd']:.3f}"
+                f"{'' if controls_ok else ', OFF by more than %g %%: the CPU time is not trusted' % (100 * CONTROL_TOL)})")
+        count_ok, time_ok = C["count_ratio"] <= 1.3, C["time_ratio"] <= 1.3 and controls_ok
         status = verdict(count_ok and time_ok)
         if count_ok != time_ok:
             status += f" (in the count: {'met' if count_ok else 'not met'}; in CPU time: {'met' if time_ok else 'not met'})"
@@ -219,8 +239,8 @@ def main():
     ap.add_argument("--small", type=int, default=10000)
     ap.add_argument("--mid", type=int, default=100000)
     ap.add_argument("--large", type=int, default=1000000)
-    ap.add_argument("--rounds", type=int, default=7, help="micro-benchmarks: interleaved rounds")
-    ap.add_argument("--min-time", default="0.5", help="micro-benchmarks: --benchmark_min_time, s")
+    ap.add_argument("--rounds", type=int, default=3, help="BM_ForceAlternate: repetitions")
+    ap.add_argument("--min-time", default="2", help="BM_ForceAlternate: --benchmark_min_time per repetition, s")
     ap.add_argument("--iters", type=int, default=6, help="counted force-loop calls (contact_instructions.py)")
     ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
     ap.add_argument("--bench", default=os.path.join(REPO, "build", "cohdem_bench"))

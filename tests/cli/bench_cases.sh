@@ -200,7 +200,8 @@ S = t['figures']['scaling']
 ok = len(t['table']) == $tg_rows and len(S['identical']) == 4 and all(v['identical'] for v in S['identical'].values())
 ok = ok and all(v['ceiling_mean_core'] > 0 for v in S['speedup'].values())
 C = t['figures'].get('contacts')
-ok = ok and (C is None or 1.0 < C['count_ratio'] < 3.0)
+ok = ok and (C is None or (1.0 < C['count_ratio'] < 3.0 and 0.5 < C['time_ratio'] < 3.0 and C['blocks'] > 0
+                           and all(0.5 < C[k] < 2.0 for k in ('control_linear', 'control_mepa_epsd'))))
 L, FL = json.load(open('$work/tg/scaling/scaling.json'))['lammps'], S['flatness']['lammps']
 close = lambda x, y: abs(x - y) <= 1e-9 * abs(y)
 ok = ok and close(FL['ratio_median'], 2.5) and close(FL['ns_small'], 20) and close(FL['ns_large'], 50)
@@ -209,7 +210,8 @@ ok = ok and 'LAMMPS on the same gases in the same repeats 2.50x' in t['table'][1
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   targets.py --quick (LAMMPS stand-in)"; else echo "FAIL targets.py --quick"; tail -5 "$work/tg.log"; fail=$((fail+1)); fi
 # targets.py's verdicts at the bounds (figures made up): >= 2x paired with the physics
 # agreeing, >= 1.8x at every size with identical results, <= 1.2x flatness, <= 1.3x in the
-# count and in CPU time; just past each bound, or with the physics or identity failing, not met;
+# count and in CPU time; just past each bound, or with the physics or identity failing, or a
+# control of the CPU-time measurement (a law against itself) off by more than 3 %, not met;
 # a size missed where two independent runs also stayed below 1.8x is named as such; LAMMPS's
 # own flatness, shown beside the verdict, does not change it.
 if python3 - "$src/bench" <<'PY'
@@ -225,9 +227,10 @@ def scaling(sp, same=True, flat=1.2, ceiling=2.0):
                         "identical": {"10,000": {"identical": True}, "32,000 (chute)": {"identical": same}},
                         "flatness": {"small": 10000, "large": 1000000, "ns_small": 20, "ns_large": 20 * flat,
                                      "ratio_median": flat, "ratio_best": flat}}}
-def contacts(count, time):
-    return {"contacts": {"count_ratio": count, "time_ratio_paired": time, "instructions_linear": 100,
-                         "instructions_mepa_epsd": 100 * count, "time_linear_s": 1e-3, "time_mepa_epsd_s": time * 1e-3}}
+def contacts(count, time, control=1.0):
+    return {"contacts": {"count_ratio": count, "time_ratio": time, "instructions_linear": 100,
+                         "instructions_mepa_epsd": 100 * count, "time_linear_s": 1e-3, "time_mepa_epsd_s": time * 1e-3,
+                         "time_ratio_quartiles": [time, time], "control_linear": control, "control_mepa_epsd": 1.0}}
 def status(got, row=0):
     return targets.table(got)[row][2]
 met = lambda s: s.startswith("**met**")
@@ -236,7 +239,10 @@ checks = [met(status(peers(2.0, 3.0))), not met(status(peers(1.99, 3.0))), not m
           "two independent" in status(scaling(1.7, ceiling=1.75)), "two independent" not in status(scaling(1.7)),
           met(status(scaling(1.8, flat=1.2), 1)), not met(status(scaling(1.8, flat=1.21), 1)),
           met(status(contacts(1.3, 1.3))), not met(status(contacts(1.25, 1.31))),
-          "in CPU time: not met" in status(contacts(1.25, 1.31)), len(targets.table({})) == 0]
+          "in CPU time: not met" in status(contacts(1.25, 1.31)), len(targets.table({})) == 0,
+          met(status(contacts(1.25, 1.25, control=0.971))), met(status(contacts(1.25, 1.25, control=1.029))),
+          not met(status(contacts(1.25, 1.25, control=1.031))),
+          "not trusted" in targets.table(contacts(1.25, 1.25, control=0.969))[0][1]]
 # LAMMPS's figures beside the flatness verdict do not move it: cohdem's 1.21x stays not met
 # with a flat LAMMPS, 1.2x met with a steep one.
 def with_lammps(flat, lmp):
