@@ -524,7 +524,7 @@ __attribute__((target("avx2"), always_inline)) inline void linear_group(
   // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
   if constexpr (kRoll) {
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                              par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
+                        par(&LP::damped), splat(in.dt), rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
   } else {
@@ -580,7 +580,7 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
   if constexpr (kRoll) {
     const L3 mr = epsd4(in, G, mk, kn, fc, par(&LP::mu_r), par(&LP::two_eta_r),
-                              par(&LP::damped), dt, rolling_inertia4(in, G));
+                        par(&LP::damped), dt, rolling_inertia4(in, G));
     put(G, g, alive, fn, ft, &mr, a, out);
     // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
