@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Issue 6's four targets, measured in one invocation and judged, with every figure's source.
 
-  python3 bench/targets.py                  # all four, about 15 minutes on the 2-core development VM
+  python3 bench/targets.py                  # all four, about 20 minutes on the 2-core development VM
   python3 bench/targets.py --only scaling   # some of them: peers, scaling, contacts (comma-separated)
   python3 bench/targets.py --quick          # the script end to end in about a minute (small sizes, few
                                             # steps: the figures then say nothing about the targets)
