@@ -99,34 +99,13 @@ struct ModelCase {
   const char* rolling;
 };
 
-/// The bulk force loop (both passes) of one contact model, lists built once.
-void BM_Force(benchmark::State& st, ModelCase mc) {
-  const int n = int(st.range(0));
-  std::unique_ptr<System> s;
-  try {
-    s = lattice(n, mc.model, mc.rolling);
-    s->prepare();
-  } catch (const std::exception& e) {
-    st.SkipWithError(e.what());
-    return;
-  }
-  // Load the histories: a few real steps.
-  s->run(5);
-  std::vector<PairResult> pr(s->nl.pair_count()), rev(s->particles.size());
-  std::vector<Vec3> fw, tww, cw;
-  ForceContext ctx{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, rev, fw, tww, cw};
-  ctx.keep_pair = false;  // as in a run that records no contacts (one thread: no per-pair stores)
-  for (auto _ : st) {
-    s->model->compute(ctx);
-    benchmark::DoNotOptimize(s->particles.force.data());
-    benchmark::ClobberMemory();
-  }
-  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
-  st.counters["contacts_per_particle"] = double(s->pair_contact_count()) / double(s->particles.size());
-  st.counters["particles"] = double(s->particles.size());
+/// "model" or "model+rolling", as the benchmarks are named.
+std::string tag_of(const ModelCase& m) {
+  return std::string(m.model) + (std::string(m.rolling) == "none" ? "" : "+" + std::string(m.rolling));
 }
 
-/// One model's lattice, lists and force context, for BM_ForceAlternate.
+/// One model's lattice (lists built once, histories loaded by a few real steps) and its
+/// force context, as in a run that records no contacts (one thread: no per-pair stores).
 struct ForceLoop {
   std::unique_ptr<System> s;
   std::vector<PairResult> pr, rev;
@@ -134,24 +113,44 @@ struct ForceLoop {
   std::unique_ptr<ForceContext> ctx;
   ForceLoop(const int n, const ModelCase mc) : s(lattice(n, mc.model, mc.rolling)) {
     s->prepare();
-    s->run(5);  // load the histories, as BM_Force
+    s->run(5);
     pr.resize(s->nl.pair_count());
     rev.resize(s->particles.size());
     ctx = std::make_unique<ForceContext>(
         ForceContext{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pr, rev, fw, tww, cw});
     ctx->keep_pair = false;
   }
+  /// One force call (both passes).
+  void compute() {
+    s->model->compute(*ctx);
+    benchmark::DoNotOptimize(s->particles.force.data());
+    benchmark::ClobberMemory();
+  }
   /// One force call; returns its thread CPU time, s.
   double call() {
     timespec t0, t1;
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
-    s->model->compute(*ctx);
-    benchmark::DoNotOptimize(s->particles.force.data());
-    benchmark::ClobberMemory();
+    compute();
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
     return double(t1.tv_sec - t0.tv_sec) + 1e-9 * double(t1.tv_nsec - t0.tv_nsec);
   }
 };
+
+/// The bulk force loop (both passes) of one contact model, lists built once.
+void BM_Force(benchmark::State& st, ModelCase mc) {
+  std::unique_ptr<ForceLoop> L;
+  try {
+    L = std::make_unique<ForceLoop>(int(st.range(0)), mc);
+  } catch (const std::exception& e) {
+    st.SkipWithError(e.what());
+    return;
+  }
+  for (auto _ : st) L->compute();
+  const System& s = *L->s;
+  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s.particles.size()));
+  st.counters["contacts_per_particle"] = double(s.pair_contact_count()) / double(s.particles.size());
+  st.counters["particles"] = double(s.particles.size());
+}
 
 /// Two models' force loops (BM_Force's lattice) alternated in one process, in blocks of a few
 /// calls each: the ratio of their costs on a shared machine, where the host's load drifts
@@ -321,7 +320,7 @@ void register_all() {
     }
   }
   for (const auto& c : cases) {
-    const std::string tag = std::string(c.model) + (std::string(c.rolling) == "none" ? "" : "+" + std::string(c.rolling));
+    const std::string tag = tag_of(c);
     iters(benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c))->Arg(32)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
   }
@@ -330,10 +329,8 @@ void register_all() {
   for (const auto& [a, b] : {std::pair{ModelCase{"linear", "none"}, ModelCase{"mepa", "epsd"}},
                              std::pair{ModelCase{"linear", "none"}, ModelCase{"linear", "none"}},
                              std::pair{ModelCase{"mepa", "epsd"}, ModelCase{"mepa", "epsd"}}}) {
-    const auto tag = [](const ModelCase& m) {
-      return std::string(m.model) + (std::string(m.rolling) == "none" ? "" : "+" + std::string(m.rolling));
-    };
-    iters(benchmark::RegisterBenchmark(("BM_ForceAlternate/" + tag(a) + "/" + tag(b)).c_str(), BM_ForceAlternate, a, b))
+    iters(benchmark::RegisterBenchmark(("BM_ForceAlternate/" + tag_of(a) + "/" + tag_of(b)).c_str(), BM_ForceAlternate,
+                                       a, b))
         ->Arg(32)->Unit(benchmark::kMillisecond);
   }
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();

@@ -151,7 +151,7 @@ def contacts(a, out):
     reps = {}  # "a/b" -> the iteration runs (one per repetition)
     for b in json.load(open(fa))["benchmarks"]:
         if b.get("run_type", "iteration") == "iteration" and "ratio" in b:
-            reps.setdefault(b["name"].split("/")[1] + "/" + b["name"].split("/")[2], []).append(b)
+            reps.setdefault("/".join(b["name"].split("/")[1:3]), []).append(b)
     med = lambda key, field: statistics.median(r[field] for r in reps[key])
     return {"instructions_linear": ipc["linear"], "instructions_mepa_epsd": ipc["mepa+epsd"],
             "count_ratio": ipc["mepa+epsd"] / ipc["linear"],

@@ -310,7 +310,7 @@ LANES_FN L3 spring4(L3& fs, const L3& vt, const V4 kt, const V4 dt, const V4 gam
 /// TangentialCommon::update with a stiffness record (State::kt_prev), after its rotation
 /// (the caller's rotate_into_plane4): the spring scaled by kt/kt_prev where the stiffness
 /// fell, then spring4; kt_prev becomes kt.
-LANES_FN L3 spring_prev4(L3& fs, V4& kt_prev, const L3& n, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t,
+LANES_FN L3 spring_prev4(L3& fs, V4& kt_prev, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t,
                          const V4 mu, const V4 fc) {
   fs = sel3((kt_prev > 0.0) & (kt < kt_prev), fs * (kt / kt_prev), fs);
   kt_prev = kt;
@@ -574,7 +574,7 @@ __attribute__((target("avx2"), always_inline)) inline void hertz_group(
   const V4 fc = max0(fn);
   // MindlinTangential: kt = 8 G* a; a spring whose stiffness fell is scaled by kt/kt_prev.
   const V4 kt = par(&LP::eight_Gstar) * a;
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::damp_kt) * gamma,
+  const L3 ft = spring_prev4(fs, kt_prev, G.vt, kt, dt, par(&LP::damp_kt) * gamma,
                              par(&LP::mu), fc);
   // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
@@ -643,7 +643,7 @@ __attribute__((target("avx2"), always_inline)) inline void mepa_group(
   const V4 fc = max0(sel(par(&LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
   const V4 kt = sel(par(&LP::kt_const), par(&LP::kt_c), par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
-  const L3 ft = spring_prev4(fs, kt_prev, G.n, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
+  const L3 ft = spring_prev4(fs, kt_prev, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
   const V4 a = in.want_a ? sqrt4(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
   // int32 followed by 4 bytes of padding: its lane holds it zero-extended, so the padding
