@@ -187,7 +187,8 @@ PipeBed measure_pipe_bed(const System& s, double R, double z_base) {
     r.push_back(P.radius[i]);
     z.push_back(P.x[i].z);
     b.mass += P.mass[i];
-    rho += P.mass[i] / (4.0 / 3.0 * M_PI * std::pow(P.radius0[i], 3));
+    // The solid density from the reference radius (a thermal run's radii follow temperature).
+    rho += P.mass[i] / (4.0 / 3.0 * M_PI * std::pow(P.thermal() ? P.radius0[i] : P.radius[i], 3));
   }
   b.count = x.size();
   if (x.empty()) return b;

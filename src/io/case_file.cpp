@@ -618,7 +618,10 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
   s->rng = Rng(c.seed);
   s->set_model(make_contact_model(c.model, c.rolling, c.file), c.pair_params);
   s->walls = c.walls;
-  if (c.thermal.enabled) s->thermal = std::make_shared<ThermalModel>(c.thermal, c.materials);
+  if (c.thermal.enabled) {
+    s->thermal = std::make_shared<ThermalModel>(c.thermal, c.materials);
+    s->particles.enable_thermal(c.cfg.initial_temperature);  // before the particles: their tables' temperatures
+  }
   if (fill) {  // the particle arrays sized to what is known (fills to a solids fraction: trimmed below)
     size_t n = c.particles.size();
     for (const auto& st : c.inserts) n += st.pour ? 0 : st.spec.count;

@@ -157,6 +157,17 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   in.vec(P.radius); in.vec(P.radius0); in.vec(P.mass); in.vec(P.inertia);
   in.vec(P.x); in.vec(P.v); in.vec(P.omega); in.vec(P.force); in.vec(P.torque);
   in.vec(P.temperature); in.vec(P.heat_flow);
+  // The thermal fields: written by runs that keep them (ParticleStore::enable_thermal),
+  // empty otherwise. A thermal case resuming a mechanical run's checkpoint starts every
+  // particle at its initial temperature, with its current radius as the reference; a
+  // mechanical case drops a thermal run's.
+  for (const std::vector<double>* a : {&P.radius0, &P.temperature, &P.heat_flow})
+    if (!a->empty() && a->size() != P.id.size())
+      throw InputError(path.string(), 0, "", "checkpoint's thermal fields do not match its particles");
+  if (s.thermal)
+    P.enable_thermal(s.cfg.initial_temperature);
+  else
+    P.disable_thermal();
   if (in.pod<uint64_t>() != s.walls.size())
     throw InputError(path.string(), 0, "wall", "checkpoint has a different number of walls than the case");
   for (Wall& w : s.walls) {

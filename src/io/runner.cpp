@@ -133,8 +133,10 @@ VtuData particles_frame(const System& s) {
   d.add_point_vector("omega", P.omega);
   d.add_point_vector("force", P.force);
   d.add_point_u8("flag", P.flag);
-  d.add_point_scalar("temperature", P.temperature);
-  if (s.thermal) d.add_point_scalar("heat_flow", P.heat_flow);
+  if (P.thermal()) {  // a mechanical run keeps no temperatures (ParticleStore::enable_thermal)
+    d.add_point_scalar("temperature", P.temperature);
+    d.add_point_scalar("heat_flow", P.heat_flow);
+  }
   return d;
 }
 
@@ -535,7 +537,8 @@ int check_case(const Case& c) {
   if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
   // Memory of a one-thread run's time loop (its peak, as summary.json's peak_rss_run_bytes
   // measures it; with [[particle]] tables the parse of the case file can peak higher, about
-  // 2 kB a particle): per particle, the particle arrays (185 bytes, particles/particle_store.hpp),
+  // 2 kB a particle): per particle, the particle arrays (161 bytes, particles/particle_store.hpp;
+  // 24 more with [thermal]: reference radius, temperature, heat flow),
   // the lists' per-particle arrays and reference state (88) and the force loop's reverse sums
   // (48); per entry of the half list, partner, image, transposed index, live flag, the pair
   // as found at a build (9) and the history record, with the lists' eighth of headroom; per
@@ -550,7 +553,8 @@ int check_case(const Case& c) {
     const double skin = c.cfg.skin > 0 ? c.cfg.skin : 0.2 * rmax;  // System::prepare's default
     const double entries = 0.5 * 0.64 * 8 * std::pow(1 + skin / d, 3);
     const double rec = double(s.model->state_size());
-    const double per_particle = 185 + 88 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
+    const double per_particle =
+        161 + (c.thermal.enabled ? 24 : 0) + 88 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
     const double bytes = 7.0 * 1048576 + total * per_particle;
     fmt::print("memory estimate: {:.1f} MiB for the time loop on one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
                bytes / 1048576.0, bytes / total, entries);

@@ -1,5 +1,7 @@
 #include "particles/particle_store.hpp"
 
+#include <algorithm>
+
 namespace cohdem {
 
 namespace {
@@ -18,6 +20,23 @@ void compact(std::vector<T>& a, const std::vector<uint8_t>& remove) {
 }
 }  // namespace
 
+void ParticleStore::enable_thermal(const double T0) {
+  const size_t n = size();
+  if (radius0.size() != n) {  // those it has are kept (a checkpoint's, a case table's)
+    const size_t have = std::min(radius0.size(), n);
+    radius0.resize(n);
+    for (size_t i = have; i < n; ++i) radius0[i] = radius[i];
+  }
+  if (temperature.size() != n) temperature.resize(n, T0);
+  if (heat_flow.size() != n) heat_flow.resize(n, 0.0);
+  thermal_ = true;
+}
+
+void ParticleStore::disable_thermal() {
+  thermal_ = false;
+  for (auto* a : {&radius0, &temperature, &heat_flow}) std::vector<double>().swap(*a);
+}
+
 void ParticleStore::permute(const std::vector<uint32_t>& perm) {
   std::vector<uint64_t> tu;
   std::vector<int32_t> ti;
@@ -28,31 +47,36 @@ void ParticleStore::permute(const std::vector<uint32_t>& perm) {
   apply_perm(species, perm, ti);
   apply_perm(body, perm, ti);
   apply_perm(flag, perm, tb);
-  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) apply_perm(*a, perm, td);
+  for (auto* a : {&radius, &mass, &inertia}) apply_perm(*a, perm, td);
+  for (auto* a : thermal_arrays()) apply_perm(*a, perm, td);
   for (auto* a : {&x, &v, &omega, &force, &torque}) apply_perm(*a, perm, tv);
 }
 
 void ParticleStore::resize(size_t n) {
   id.resize(n); species.resize(n); flag.resize(n); body.resize(n, -1);
-  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->resize(n);
+  for (auto* a : {&radius, &mass, &inertia}) a->resize(n);
+  for (auto* a : thermal_arrays()) a->resize(n);
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->resize(n);
 }
 
 void ParticleStore::reserve(size_t n) {
   id.reserve(n); species.reserve(n); flag.reserve(n); body.reserve(n);
-  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->reserve(n);
+  for (auto* a : {&radius, &mass, &inertia}) a->reserve(n);
+  for (auto* a : thermal_arrays()) a->reserve(n);
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->reserve(n);
 }
 
 void ParticleStore::shrink_to_fit() {
   id.shrink_to_fit(); species.shrink_to_fit(); flag.shrink_to_fit(); body.shrink_to_fit();
-  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) a->shrink_to_fit();
+  for (auto* a : {&radius, &mass, &inertia}) a->shrink_to_fit();
+  for (auto* a : thermal_arrays()) a->shrink_to_fit();
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->shrink_to_fit();
 }
 
 void ParticleStore::erase_if_flagged(const std::vector<uint8_t>& remove) {
   compact(id, remove); compact(species, remove); compact(flag, remove); compact(body, remove);
-  for (auto* a : {&radius, &radius0, &mass, &inertia, &temperature, &heat_flow}) compact(*a, remove);
+  for (auto* a : {&radius, &mass, &inertia}) compact(*a, remove);
+  for (auto* a : thermal_arrays()) compact(*a, remove);
   for (auto* a : {&x, &v, &omega, &force, &torque}) compact(*a, remove);
 }
 

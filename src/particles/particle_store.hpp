@@ -20,14 +20,26 @@ struct ParticleStore {
   std::vector<int32_t> species;
   std::vector<uint8_t> flag;
   std::vector<int32_t> body;  ///< wall index for kAttached particles, -1 otherwise
-  std::vector<double> radius, radius0;  ///< current and reference (T0) radius, m
+  std::vector<double> radius;           ///< current radius, m
   std::vector<double> mass, inertia;    ///< kg, kg m^2 (solid sphere 2/5 m r^2)
   std::vector<Vec3> x, v, omega;        ///< position m, velocity m/s, angular velocity rad/s
   std::vector<Vec3> force, torque;      ///< N, N m (contact + body forces, this step)
+  // The thermal fields: one entry per particle once enable_thermal() has run (a run with a
+  // thermal model), empty otherwise (24 bytes per particle that a purely mechanical run
+  // would carry, write to checkpoints and permute at every re-sort for nothing).
+  std::vector<double> radius0;          ///< reference radius (at the material's T_ref), m
   std::vector<double> temperature;      ///< K
   std::vector<double> heat_flow;        ///< W (this step)
 
   size_t size() const { return id.size(); }
+  /// Whether the thermal fields are kept (enable_thermal).
+  bool thermal() const { return thermal_; }
+  /// Keeps the thermal fields from now on: a particle that has none gets radius0 = its
+  /// radius, temperature T0 and no heat flow (those already set, e.g. from a checkpoint or a
+  /// case's particle table, stay). Idempotent.
+  void enable_thermal(double T0);
+  /// Drops the thermal fields (a checkpoint of a thermal run read into a mechanical one).
+  void disable_thermal();
 
   /// Appends one particle; returns its local index.
   size_t add(uint64_t pid, int32_t sp, double r, double density, const Vec3& pos,
@@ -37,7 +49,6 @@ struct ParticleStore {
     flag.push_back(kFree);
     body.push_back(-1);
     radius.push_back(r);
-    radius0.push_back(r);
     const double m = density * 4.0 / 3.0 * M_PI * r * r * r;
     mass.push_back(m);
     inertia.push_back(0.4 * m * r * r);
@@ -46,8 +57,11 @@ struct ParticleStore {
     omega.push_back(w);
     force.emplace_back();
     torque.emplace_back();
-    temperature.push_back(temp);
-    heat_flow.push_back(0.0);
+    if (thermal_) {
+      radius0.push_back(r);
+      temperature.push_back(temp);
+      heat_flow.push_back(0.0);
+    }
     return id.size() - 1;
   }
 
@@ -61,6 +75,14 @@ struct ParticleStore {
   /// Drops every array's unused capacity.
   void shrink_to_fit();
   void erase_if_flagged(const std::vector<uint8_t>& remove);
+
+ private:
+  /// The thermal fields' arrays, empty unless enable_thermal ran.
+  std::vector<std::vector<double>*> thermal_arrays() {
+    if (!thermal_) return {};
+    return {&radius0, &temperature, &heat_flow};
+  }
+  bool thermal_ = false;
 };
 
 }  // namespace cohdem

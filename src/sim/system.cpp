@@ -66,6 +66,9 @@ void System::resume_prepare(const NeighborList::Reference* ref) {
 
 void System::prepare_reach() {
   if (!model) throw RunError("no contact model set");
+  // The thermal fields, kept only with a thermal model (however it was attached; a particle
+  // without them starts at the initial temperature), before any re-sort permutes them.
+  if (thermal) particles.enable_thermal(cfg.initial_temperature);
   if (cfg.threads > 0) omp_set_num_threads(cfg.threads);
   double rmax = 0;
   for (double r : particles.radius) rmax = std::max(rmax, r);

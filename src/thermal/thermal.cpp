@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
@@ -69,6 +70,7 @@ double ThermalModel::wall_temperature(size_t w, double t) const {
 
 void ThermalModel::update(System& s, bool integrate) {
   ParticleStore& P = s.particles;
+  if (!P.thermal()) throw std::logic_error("ThermalModel::update before System::prepare (no thermal fields)");
   const NeighborList& nl = s.nl;
   const long n = long(P.size());
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();

@@ -1,8 +1,12 @@
 // Analytic checks of heat conduction and thermal expansion (docs/packed-beds.md, "Checks").
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <unistd.h>
 
+#include <cmath>
+#include <filesystem>
+
+#include "io/checkpoint.hpp"
 #include "physics/fixture.hpp"
 #include "thermal/thermal.hpp"
 
@@ -232,4 +236,73 @@ TEST(Thermal, IndependentOfThreadCount) {
     return T;
   };
   EXPECT_EQ(run(1), run(2));
+}
+
+// The thermal fields (reference radius, temperature, heat flow) exist only in runs with a
+// thermal model: a mechanical run carries none of their 24 bytes a particle. Once kept, they
+// follow their particles through a re-sort and a removal, and a checkpoint carries them
+// between runs: a thermal case resuming a mechanical run's checkpoint starts every particle at
+// its initial temperature with its current radius as the reference (what the particles had
+// when every run kept the fields), and a mechanical case drops a thermal run's.
+TEST(Thermal, FieldsOnlyInThermalRunsAndFollowTheirParticles) {
+  const double r = 1e-3;
+  auto mech = chain(5, r, 1e-6, glass(1.0, 1000, 1e-5, 300), 1e-6);
+  mech->prepare();
+  mech->run(10);
+  const size_t n = mech->particles.size();
+  EXPECT_FALSE(mech->particles.thermal());
+  EXPECT_TRUE(mech->particles.radius0.empty() && mech->particles.temperature.empty() &&
+              mech->particles.heat_flow.empty());
+
+  // Mechanical checkpoint into a thermal system: initial temperature, reference radius = radius.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("cohdem_test_thermal_fields_" + std::to_string(::getpid()) + ".bin");
+  write_checkpoint(path, *mech);
+  auto hot = chain(5, r, 1e-6, glass(1.0, 1000, 1e-5, 300), 1e-6);
+  hot->cfg.initial_temperature = 350;
+  hot->thermal = std::make_shared<ThermalModel>(settings(1), hot->materials);
+  read_checkpoint(path, *hot);
+  ASSERT_TRUE(hot->particles.thermal());
+  ASSERT_EQ(hot->particles.temperature.size(), n);
+  for (size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(hot->particles.temperature[i], 350);
+    EXPECT_EQ(hot->particles.radius0[i], hot->particles.radius[i]);
+    EXPECT_EQ(hot->particles.heat_flow[i], 0);
+  }
+
+  // Distinct values by id, then a permutation (a re-sort) and a removal: each stays with its id.
+  ParticleStore& P = hot->particles;
+  for (size_t i = 0; i < n; ++i) {
+    P.temperature[i] = 300 + double(P.id[i]);
+    P.radius0[i] = r * (1 + 1e-3 * double(P.id[i]));
+    P.heat_flow[i] = -double(P.id[i]);
+  }
+  std::vector<uint32_t> perm(n);
+  for (size_t k = 0; k < n; ++k) perm[k] = uint32_t(n - 1 - k);
+  P.permute(perm);
+  std::vector<uint8_t> remove(n, 0);
+  remove[1] = 1;
+  P.erase_if_flagged(remove);
+  ASSERT_EQ(P.size(), n - 1);
+  ASSERT_EQ(P.temperature.size(), n - 1);
+  for (size_t i = 0; i < P.size(); ++i) {
+    EXPECT_EQ(P.temperature[i], 300 + double(P.id[i]));
+    EXPECT_EQ(P.radius0[i], r * (1 + 1e-3 * double(P.id[i])));
+    EXPECT_EQ(P.heat_flow[i], -double(P.id[i]));
+  }
+  // A particle added to a thermal run gets the fields at once.
+  hot->add_particle(0, r, {0, 0, 0.1});
+  EXPECT_EQ(P.temperature.back(), 350);
+  EXPECT_EQ(P.radius0.back(), r);
+
+  // A thermal run's checkpoint into a mechanical system: the fields are dropped.
+  hot->particles.erase_if_flagged(std::vector<uint8_t>(P.size(), 0));
+  hot->prepare();
+  write_checkpoint(path, *hot);
+  auto cold = chain(5, r, 1e-6, glass(1.0, 1000, 1e-5, 300), 1e-6);
+  read_checkpoint(path, *cold);
+  std::filesystem::remove(path);
+  EXPECT_FALSE(cold->particles.thermal());
+  EXPECT_TRUE(cold->particles.temperature.empty() && cold->particles.radius0.empty());
+  EXPECT_EQ(cold->particles.size(), hot->particles.size());
 }
