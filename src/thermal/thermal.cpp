@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
@@ -70,7 +69,9 @@ double ThermalModel::wall_temperature(size_t w, double t) const {
 
 void ThermalModel::update(System& s, bool integrate) {
   ParticleStore& P = s.particles;
-  if (!P.thermal()) throw std::logic_error("ThermalModel::update before System::prepare (no thermal fields)");
+  // A model attached to a system already prepared without one: its particles start at the
+  // initial temperature (System::prepare_reach does the same).
+  if (!P.thermal()) P.enable_thermal(s.cfg.initial_temperature);
   const NeighborList& nl = s.nl;
   const long n = long(P.size());
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();

@@ -258,6 +258,13 @@ TEST(Thermal, FieldsOnlyInThermalRunsAndFollowTheirParticles) {
   const auto path = std::filesystem::temp_directory_path() /
                     ("cohdem_test_thermal_fields_" + std::to_string(::getpid()) + ".bin");
   write_checkpoint(path, *mech);
+  // A thermal model attached to a system prepared without one: its particles start at the
+  // initial temperature (no heat flows between equal temperatures).
+  mech->thermal = std::make_shared<ThermalModel>(settings(1), mech->materials);
+  mech->run(2);
+  ASSERT_TRUE(mech->particles.thermal());
+  ASSERT_EQ(mech->particles.temperature.size(), n);
+  for (double T : mech->particles.temperature) EXPECT_EQ(T, mech->cfg.initial_temperature);
   auto hot = chain(5, r, 1e-6, glass(1.0, 1000, 1e-5, 300), 1e-6);
   hot->cfg.initial_temperature = 350;
   hot->thermal = std::make_shared<ThermalModel>(settings(1), hot->materials);
@@ -296,7 +303,6 @@ TEST(Thermal, FieldsOnlyInThermalRunsAndFollowTheirParticles) {
   EXPECT_EQ(P.radius0.back(), r);
 
   // A thermal run's checkpoint into a mechanical system: the fields are dropped.
-  hot->particles.erase_if_flagged(std::vector<uint8_t>(P.size(), 0));
   hot->prepare();
   write_checkpoint(path, *hot);
   auto cold = chain(5, r, 1e-6, glass(1.0, 1000, 1e-5, 300), 1e-6);
