@@ -127,8 +127,10 @@ void rough_layer(System& s, const RingShearSpec& r, double z0, bool below, int b
   }
   for (size_t q = 0; q < placed.size(); ++q) {
     const size_t i = s.add_particle(r.material, radii[q], placed[q]);
-    s.particles.flag[i] = body < 0 ? kFrozen : kAttached;
-    s.particles.body[i] = body;
+    if (body < 0)
+      s.particles.flag[i] = kFrozen;
+    else
+      s.particles.attach(i, body);
   }
 }
 

@@ -632,7 +632,7 @@ std::unique_ptr<System> build_system(const Case& c, bool fill) {
     const size_t i = s->add_particle(p.material, p.radius, p.x, p.v, p.omega);
     if (p.temperature > 0) s->particles.temperature[i] = p.temperature;
     if (p.frozen) s->particles.flag[i] = kFrozen;
-    if (p.attach_wall >= 0) { s->particles.flag[i] = kAttached; s->particles.body[i] = p.attach_wall; }
+    if (p.attach_wall >= 0) s->particles.attach(i, p.attach_wall);
   }
   for (const auto& st : c.inserts) {
     if (st.pour) {

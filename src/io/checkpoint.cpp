@@ -1,5 +1,6 @@
 #include "io/checkpoint.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -161,9 +162,23 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   // empty otherwise. A thermal case resuming a mechanical run's checkpoint starts every
   // particle at its initial temperature, with its current radius as the reference; a
   // mechanical case drops a thermal run's.
+  const size_t n = P.id.size();
+  auto bad = [&](const char* what) {
+    throw InputError(path.string(), 0, "", std::string("checkpoint's ") + what + " do not match its particles");
+  };
+  if (P.species.size() != n || P.flag.size() != n || P.radius.size() != n || P.mass.size() != n ||
+      P.inertia.size() != n || P.x.size() != n || P.v.size() != n || P.omega.size() != n || P.force.size() != n ||
+      P.torque.size() != n)
+    bad("particle arrays");
   for (const std::vector<double>* a : {&P.radius0, &P.temperature, &P.heat_flow})
-    if (!a->empty() && a->size() != P.id.size())
-      throw InputError(path.string(), 0, "", "checkpoint's thermal fields do not match its particles");
+    if (!a->empty() && a->size() != n) bad("thermal fields");
+  // The wall indices: written by runs with attached particles (ParticleStore::attach), empty
+  // otherwise (checkpoints before that change hold -1 for every unattached particle).
+  if (!P.body.empty() && P.body.size() != n) bad("wall attachments");
+  for (size_t i = 0; i < n; ++i)
+    if (P.flag[i] == kAttached && (P.body.empty() || P.body[i] < 0 || size_t(P.body[i]) >= s.walls.size()))
+      bad("wall attachments");
+  if (std::find(P.flag.begin(), P.flag.end(), uint8_t(kAttached)) == P.flag.end()) std::vector<int32_t>().swap(P.body);
   if (s.thermal)
     P.enable_thermal(s.cfg.initial_temperature);
   else
@@ -186,7 +201,8 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
     NeighborList::Reference ref;
     in.vec(ref.x); in.vec(ref.r); in.vec(ref.wall);
     app_state = in.str();
-    if (ref.x.size() != P.id.size() || ref.r.size() != P.id.size() || ref.wall.size() != s.walls.size())
+    // ref.r is empty where the radii could not change since the lists were built.
+    if (ref.x.size() != n || (!ref.r.empty() && ref.r.size() != n) || ref.wall.size() != s.walls.size())
       throw InputError(path.string(), 0, "", "checkpoint's neighbor-list state does not match its particles");
     s.resume_prepare(&ref);
   } else {

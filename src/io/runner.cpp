@@ -537,10 +537,10 @@ int check_case(const Case& c) {
   if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
   // Memory of a one-thread run's time loop (its peak, as summary.json's peak_rss_run_bytes
   // measures it; with [[particle]] tables the parse of the case file can peak higher, about
-  // 2 kB a particle): per particle, the particle arrays (161 bytes, particles/particle_store.hpp;
-  // 24 more with [thermal]: reference radius, temperature, heat flow),
-  // the lists' per-particle arrays and reference state (88) and the force loop's reverse sums
-  // (48); per entry of the half list, partner, image, transposed index, live flag, the pair
+  // 2 kB a particle): per particle, the particle arrays (157 bytes, particles/particle_store.hpp;
+  // 4 more with particles attached to walls: their wall; 24 more with [thermal]: reference
+  // radius, temperature, heat flow), the lists' per-particle arrays and reference state (80;
+  // 8 more with [thermal]: the radii at the build) and the force loop's reverse sums (48); per entry of the half list, partner, image, transposed index, live flag, the pair
   // as found at a build (9) and the history record, with the lists' eighth of headroom; per
   // contact, the copy a build makes of it (partner and record). The half list of a bed at
   // random close packing (solids fraction 0.64) holds 0.5 x 0.64 x 8 (1 + skin / d)^3
@@ -549,12 +549,14 @@ int check_case(const Case& c) {
   // number 6). Plus the program itself, ~7 MiB. A looser bed or a gas holds fewer entries
   // and contacts, so this is an upper estimate for one size of particles.
   if (total > 0) {
+    bool attached = c.ring_shear.has_value();  // the tester's ribs are carried by its walls
+    for (const auto& p : c.particles) attached = attached || p.attach_wall >= 0;
     const double d = 2 * std::cbrt(3 * volume / (4 * M_PI * total));
     const double skin = c.cfg.skin > 0 ? c.cfg.skin : 0.2 * rmax;  // System::prepare's default
     const double entries = 0.5 * 0.64 * 8 * std::pow(1 + skin / d, 3);
     const double rec = double(s.model->state_size());
     const double per_particle =
-        161 + (c.thermal.enabled ? 24 : 0) + 88 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
+        157 + (attached ? 4 : 0) + (c.thermal.enabled ? 24 + 8 : 0) + 80 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
     const double bytes = 7.0 * 1048576 + total * per_particle;
     fmt::print("memory estimate: {:.1f} MiB for the time loop on one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
                bytes / 1048576.0, bytes / total, entries);

@@ -321,7 +321,14 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     start[0] = rstart[0] = 0;
     fill_.resize(n);
     ref_.x.resize(n);  // the reference state for the rebuild trigger (step 7), copied by range
-    ref_.r.resize(n);
+    // The radii only where they can change between builds: a thermal model's expansion,
+    // which keeps the thermal fields (8 bytes a particle, and a copy at each build, that a
+    // mechanical run would carry for nothing).
+    const bool keep_r = p.thermal();
+    if (keep_r)
+      ref_.r.resize(n);
+    else
+      std::vector<double>().swap(ref_.r);
     const int rows_threads = nthreads > 1 && n > 0 ? nthreads : 1;
     part_.assign(2 * size_t(rows_threads), 0);
 #pragma omp parallel num_threads(rows_threads) if (rows_threads > 1)
@@ -333,7 +340,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       uint32_t* const dl = dep_lo.data();
       for (uint32_t i = lo; i < hi; ++i) { st[i] = 0; rs[i] = 0; dl[i] = i; }
       std::copy(x + lo, x + hi, ref_.x.data() + lo);  // read by the force loop's fused drift
-      std::copy(rad + lo, rad + hi, ref_.r.data() + lo);
+      if (keep_r) std::copy(rad + lo, rad + hi, ref_.r.data() + lo);
       for (int ch = 0; ch < chunks; ++ch) {
         const std::array<uint32_t, 4>& rg = tl_rng_[size_t(ch)];
         if ((rg[1] < lo || rg[0] >= hi) && (rg[3] < lo || rg[2] >= hi)) continue;  // none of the range's
@@ -588,17 +595,22 @@ void NeighborList::keep_live_pairs(size_t old_n) {
 
 void NeighborList::rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const Domain& dom, double skin, double reach,
                               const Reference& ref) {
-  if (ref.x.size() != p.size() || ref.r.size() != p.size() || ref.wall.size() != walls.size())
+  if (ref.x.size() != p.size() || (!ref.r.empty() && ref.r.size() != p.size()) || ref.wall.size() != walls.size())
     throw RunError("neighbor list reference state does not match the particles and walls");
+  // Without reference radii the radii have not changed since that build (no thermal model).
+  const bool with_r = !ref.r.empty();
   std::vector<Vec3> x = ref.x, wp(walls.size());
-  std::vector<double> r = ref.r;
+  std::vector<double> r = with_r ? ref.r : std::vector<double>{};
   p.x.swap(x);
-  p.radius.swap(r);
+  if (with_r) p.radius.swap(r);
   for (size_t w = 0; w < walls.size(); ++w) { wp[w] = walls[w].point; walls[w].point = ref.wall[w]; }
   build(p, walls, dom, skin, reach, false);
   p.x.swap(x);
-  p.radius.swap(r);
+  if (with_r) p.radius.swap(r);
   for (size_t w = 0; w < walls.size(); ++w) walls[w].point = wp[w];
+  // A thermal run's reference radii read into a run without a thermal model: kept until the
+  // next build (the radii grew since that build, and the trigger must still count it).
+  if (with_r && ref_.r.empty()) ref_.r = ref.r;
 }
 
 bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {

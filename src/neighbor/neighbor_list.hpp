@@ -152,19 +152,25 @@ class NeighborList {
   /// The same for particle i, which can move, now at x with radius r (the force loop's fused
   /// drift passes its fresh values).
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x, double r) const {
-    d.add(x - ref_.x[i], r - ref_.r[i]);
+    if (ref_.r.empty())
+      d.add(x - ref_.x[i]);  // radii unchanged since the build (tracks_radii)
+    else
+      d.add(x - ref_.x[i], r - ref_.r[i]);
   }
+  /// Whether the lists keep the radii they were built with: only when radii can have changed
+  /// since (a thermal model's expansion, or a thermal run's checkpoint read into a run
+  /// without one, until its next build). Without them a particle's radius growth is 0.
+  bool tracks_radii() const { return !ref_.r.empty(); }
   /// The same for a particle whose radius has not changed since the build (the force loop's
-  /// fused drift: it runs only without a thermal model, the one thing that changes radii
-  /// between builds), so its radius growth, 0, is not read.
+  /// fused drift: it runs only where !tracks_radii()), so its radius growth, 0, is not read.
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - ref_.x[i]); }
 
-  /// The state the lists were last built from (positions, radii, wall points): a checkpoint
-  /// saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any
+  /// The state the lists were last built from (positions, radii where tracks_radii(), wall
+  /// points): a checkpoint saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any
   /// step (not only at a rebuild step) continues bit for bit.
   struct Reference {
     std::vector<Vec3> x;
-    std::vector<double> r;
+    std::vector<double> r;  ///< empty where radii cannot have changed (no thermal model)
     std::vector<Vec3> wall;
   };
   const Reference& reference() const { return ref_; }

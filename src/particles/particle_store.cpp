@@ -45,7 +45,7 @@ void ParticleStore::permute(const std::vector<uint32_t>& perm) {
   std::vector<Vec3> tv;
   apply_perm(id, perm, tu);
   apply_perm(species, perm, ti);
-  apply_perm(body, perm, ti);
+  for (auto* a : body_array()) apply_perm(*a, perm, ti);
   apply_perm(flag, perm, tb);
   for (auto* a : {&radius, &mass, &inertia}) apply_perm(*a, perm, td);
   for (auto* a : thermal_arrays()) apply_perm(*a, perm, td);
@@ -53,14 +53,16 @@ void ParticleStore::permute(const std::vector<uint32_t>& perm) {
 }
 
 void ParticleStore::resize(size_t n) {
-  id.resize(n); species.resize(n); flag.resize(n); body.resize(n, -1);
+  id.resize(n); species.resize(n); flag.resize(n);
+  for (auto* a : body_array()) a->resize(n, -1);
   for (auto* a : {&radius, &mass, &inertia}) a->resize(n);
   for (auto* a : thermal_arrays()) a->resize(n);
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->resize(n);
 }
 
 void ParticleStore::reserve(size_t n) {
-  id.reserve(n); species.reserve(n); flag.reserve(n); body.reserve(n);
+  id.reserve(n); species.reserve(n); flag.reserve(n);
+  for (auto* a : body_array()) a->reserve(n);
   for (auto* a : {&radius, &mass, &inertia}) a->reserve(n);
   for (auto* a : thermal_arrays()) a->reserve(n);
   for (auto* a : {&x, &v, &omega, &force, &torque}) a->reserve(n);
@@ -74,7 +76,8 @@ void ParticleStore::shrink_to_fit() {
 }
 
 void ParticleStore::erase_if_flagged(const std::vector<uint8_t>& remove) {
-  compact(id, remove); compact(species, remove); compact(flag, remove); compact(body, remove);
+  compact(id, remove); compact(species, remove); compact(flag, remove);
+  for (auto* a : body_array()) compact(*a, remove);
   for (auto* a : {&radius, &mass, &inertia}) compact(*a, remove);
   for (auto* a : thermal_arrays()) compact(*a, remove);
   for (auto* a : {&x, &v, &omega, &force, &torque}) compact(*a, remove);

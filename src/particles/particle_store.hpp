@@ -19,7 +19,10 @@ struct ParticleStore {
   std::vector<uint64_t> id;
   std::vector<int32_t> species;
   std::vector<uint8_t> flag;
-  std::vector<int32_t> body;  ///< wall index for kAttached particles, -1 otherwise
+  /// Wall index of each kAttached particle, -1 for the others; one entry per particle once
+  /// attach() has run, empty before (4 bytes per particle that runs without attached
+  /// particles would carry, permute and checkpoint for nothing).
+  std::vector<int32_t> body;
   std::vector<double> radius;           ///< current radius, m
   std::vector<double> mass, inertia;    ///< kg, kg m^2 (solid sphere 2/5 m r^2)
   std::vector<Vec3> x, v, omega;        ///< position m, velocity m/s, angular velocity rad/s
@@ -40,6 +43,13 @@ struct ParticleStore {
   void enable_thermal(double T0);
   /// Drops the thermal fields (a checkpoint of a thermal run read into a mechanical one).
   void disable_thermal();
+  /// Attaches particle i rigidly to wall `wall` (flag kAttached, body[i] = wall); the first
+  /// call gives every particle a body entry (-1 for the unattached).
+  void attach(size_t i, int32_t wall) {
+    if (body.size() != size()) body.resize(size(), -1);
+    flag[i] = kAttached;
+    body[i] = wall;
+  }
 
   /// Appends one particle; returns its local index.
   size_t add(uint64_t pid, int32_t sp, double r, double density, const Vec3& pos,
@@ -47,7 +57,7 @@ struct ParticleStore {
     id.push_back(pid);
     species.push_back(sp);
     flag.push_back(kFree);
-    body.push_back(-1);
+    if (!body.empty()) body.push_back(-1);
     radius.push_back(r);
     const double m = density * 4.0 / 3.0 * M_PI * r * r * r;
     mass.push_back(m);
@@ -77,6 +87,11 @@ struct ParticleStore {
   void erase_if_flagged(const std::vector<uint8_t>& remove);
 
  private:
+  /// The wall indices, empty until attach() ran.
+  std::vector<std::vector<int32_t>*> body_array() {
+    if (body.empty()) return {};
+    return {&body};
+  }
   /// The thermal fields' arrays, empty unless enable_thermal ran.
   std::vector<std::vector<double>*> thermal_arrays() {
     if (!thermal_) return {};

@@ -114,8 +114,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const bool keep_pair = c.keep_pair;
   const double kick_h = c.kick_h;
   const double open_dt = c.open_dt;
-  if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n))))
-    throw std::logic_error("force loop: the fused opening needs the closing half-kick, a drift and a built list");
+  if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n)) || nl.tracks_radii()))
+    throw std::logic_error(
+        "force loop: the fused opening needs the closing half-kick, a drift and a built list without radius growth");
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
@@ -344,7 +345,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         // again in this call. Particles attached to walls are carried by that pass.
         if (open_dt > 0) {
           open_free(vi, wi, x[i], F, T, hm, hI, open_dt);
-          nl.add_moved(drift, size_t(i), x[i]);  // radii unchanged since the build (no thermal model)
+          nl.add_moved(drift, size_t(i), x[i]);  // radii unchanged since the build (!tracks_radii)
         }
         v[i] = vi;
         omega[i] = wi;

@@ -70,6 +70,13 @@ void System::prepare_reach() {
   // without them starts at the initial temperature), before any re-sort permutes them.
   if (thermal) particles.enable_thermal(cfg.initial_temperature);
   if (cfg.threads > 0) omp_set_num_threads(cfg.threads);
+  // Every particle attached to a wall names one (ParticleStore::attach): the carrying and the
+  // walls' force sums index the walls by it.
+  const ParticleStore& P = particles;
+  for (size_t i = 0; i < P.size(); ++i)
+    if (P.flag[i] == kAttached && (P.body.size() != P.size() || P.body[i] < 0 || size_t(P.body[i]) >= walls.size()))
+      throw RunError("particle " + std::to_string(P.id[i]) + " is flagged as attached but names no wall of the " +
+                     std::to_string(walls.size()) + " (ParticleStore::attach)");
   double rmax = 0;
   for (double r : particles.radius) rmax = std::max(rmax, r);
   for (const auto& p : pours) rmax = std::max(rmax, p.spec.size.max_radius());
@@ -335,8 +342,9 @@ void System::step_once(bool open_next) {
   }
   // The closing half-kick: applied by the force kernel to each particle as its force is
   // complete (one pass fewer), unless a thermal model changes radii and inertia first; so is
-  // the next step's opening when the caller allows it (not with a thermal model either).
-  const bool fuse = open_next && !thermal;
+  // the next step's opening when the caller allows it (not with a thermal model either, nor
+  // while the lists still count radius growth since their build: the fused drift reads none).
+  const bool fuse = open_next && !thermal && !nl.tracks_radii();
   compute_forces(thermal ? 0.0 : h, fuse);
   if (thermal) {
     thermal->update(*this, true);  // heat flow, temperatures, radii (and inertia)

@@ -308,8 +308,7 @@ TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
         P.v[i] = P.omega[i] = Vec3{};
       }
       for (size_t i = 6; i < 10; ++i) {  // glued to the floor, which rises slowly
-        P.flag[i] = kAttached;
-        P.body[i] = 0;
+        P.attach(i, 0);
       }
       s->walls[0].velocity = {0, 0, 0.02};
       s->prepare();

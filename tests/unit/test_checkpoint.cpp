@@ -149,3 +149,65 @@ TEST(Checkpoint, RejectsCorruptLengthBeforeAllocating) {
   }
   std::filesystem::remove(path);
 }
+
+// The wall indices of attached particles (ParticleStore::body) exist only once a particle is
+// attached (ParticleStore::attach); they follow their particles through re-sorts, removals
+// and checkpoints. A particle flagged as attached that names no wall is refused by prepare(),
+// and by the checkpoint reader, instead of indexing past the walls.
+TEST(Checkpoint, WallAttachmentsOnlyWithAttachedParticles) {
+  const auto path = std::filesystem::temp_directory_path() / ("cohdem_test_checkpoint4_" + std::to_string(::getpid()) + ".bin");
+  auto a = setup();
+  for (int k = 0; k < 4; ++k) a->add_particle(0, 5e-4, {0.002 * (k + 1), 0, 0.001});
+  a->prepare();
+  EXPECT_TRUE(a->particles.body.empty());
+  EXPECT_FALSE(a->nl.tracks_radii());  // no thermal model: the radii cannot change
+  write_checkpoint(path, *a);
+  auto b = setup();
+  read_checkpoint(path, *b);
+  EXPECT_TRUE(b->particles.body.empty());
+  EXPECT_EQ(b->particles.x, a->particles.x);
+
+  // Attached: one entry per particle, -1 for the others, also for particles added later.
+  ParticleStore& P = a->particles;
+  P.attach(1, 0);
+  P.attach(3, 2);
+  a->add_particle(0, 5e-4, {0.009, 0, 0.003});
+  ASSERT_EQ(P.body.size(), 5u);
+  auto wall_of = [&](const ParticleStore& s, uint64_t id) {
+    for (size_t i = 0; i < s.size(); ++i)
+      if (s.id[i] == id) return s.flag[i] == kAttached ? s.body[i] : -1;
+    return -2;
+  };
+  const std::vector<int32_t> want{-1, 0, -1, 2, -1};  // by id 0..4
+  std::vector<uint32_t> perm{4, 2, 0, 3, 1};
+  P.permute(perm);
+  std::vector<uint8_t> remove{0, 1, 0, 0, 0};  // id 2
+  P.erase_if_flagged(remove);
+  ASSERT_EQ(P.size(), 4u);
+  for (uint64_t id : {0, 1, 3, 4}) EXPECT_EQ(wall_of(P, id), want[id]) << "id " << id;
+  a->prepare();
+  write_checkpoint(path, *a);
+  auto c = setup();
+  read_checkpoint(path, *c);
+  ASSERT_EQ(c->particles.body.size(), 4u);
+  for (uint64_t id : {0, 1, 3, 4}) EXPECT_EQ(wall_of(c->particles, id), want[id]) << "id " << id;
+
+  // A wall index past the walls, in a checkpoint: refused by the reader.
+  for (size_t i = 0; i < P.size(); ++i)
+    if (P.flag[i] == kAttached) P.body[i] = 7;
+  write_checkpoint(path, *a);
+  auto d = setup();
+  try {
+    read_checkpoint(path, *d);
+    ADD_FAILURE() << "an attachment to a missing wall was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall attachments"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  // ... and by prepare(), as is a particle flagged as attached without attach().
+  EXPECT_THROW(a->prepare(), RunError);
+  auto e = setup();
+  e->add_particle(0, 5e-4, {0.005, 0, 0.001});
+  e->particles.flag[0] = kAttached;
+  EXPECT_THROW(e->prepare(), RunError);
+}

@@ -247,3 +247,83 @@ TEST(NeighborList, RebuildCriterionNeverMissesAContact) {
   EXPECT_GT(quiet, 5) << "too few trials in which no rebuild was needed";
   EXPECT_GT(missed_trials, 10) << "too few trials that really needed a rebuild";
 }
+
+// The lists keep the radii they were built with only where radii can change between builds
+// (a thermal model's expansion keeps the thermal fields: ParticleStore::thermal()); there the
+// rebuild trigger counts radius growth, and so it does after a thermal run's reference (a
+// checkpoint's) is rebuilt into a store without the fields, until the next build. The
+// physical requirement: two particles that touch only because they grew, with no pair in the
+// list, must make the trigger ask for a rebuild.
+TEST(NeighborList, ReferenceRadiiOnlyWhereRadiiCanChange) {
+  const double skin = 2e-4;
+  Bed mech(true, 31);
+  EXPECT_FALSE(mech.nl.tracks_radii());
+  EXPECT_TRUE(mech.nl.reference().r.empty());
+
+  ParticleStore q = random_particles(1200, 0.02, 2.5e-4, 7.5e-4, 31);
+  q.enable_thermal(293.15);
+  NeighborList nl;
+  nl.hist.stride = nl.whist.stride = 8;
+  nl.build(q, {}, mech.d, skin, 0.0, false);
+  ASSERT_TRUE(nl.tracks_radii());
+  EXPECT_EQ(nl.reference().r, q.radius);
+  EXPECT_EQ(nl.start, mech.nl.start);  // the same lists either way
+  EXPECT_EQ(nl.jdx, mech.nl.jdx);
+
+  // The closest unlisted pair (gap >= skin at the build).
+  std::set<std::pair<size_t, size_t>> listed;
+  for (size_t i = 0; i < q.size(); ++i)
+    for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) listed.insert({i, size_t(nl.jdx[k])});
+  std::map<uint64_t, size_t> index_of;
+  for (size_t i = 0; i < q.size(); ++i) index_of[q.id[i]] = i;
+  double gmin = 1e9;
+  size_t a = 0, c = 0;
+  for (const auto& [key, dist] : brute(q, mech.d, 3 * skin)) {
+    const size_t ia = index_of[key.first], ic = index_of[key.second];
+    if (listed.count(std::minmax(ia, ic))) continue;
+    const double g = dist - q.radius[ia] - q.radius[ic];
+    if (g < gmin) { gmin = g; a = ia; c = ic; }
+  }
+  ASSERT_LT(gmin, 1e9);
+  ASSERT_GE(gmin, skin * (1 - 1e-9));
+  const NeighborList::Reference built = nl.reference();
+  // Growth of 0.2 skin each (the gap shrinks by 0.4 skin): safe, no rebuild.
+  ParticleStore g = q;
+  g.radius[a] += 0.2 * skin;
+  g.radius[c] += 0.2 * skin;
+  EXPECT_FALSE(nl.needs_rebuild(g, {}, skin));
+  // Growth of 0.6 gap each: the pair overlaps by 0.2 gap and is not listed.
+  g = q;
+  g.radius[a] += 0.6 * gmin;
+  g.radius[c] += 0.6 * gmin;
+  ASSERT_EQ(brute(g, mech.d, 0.0).count(std::minmax(g.id[a], g.id[c])), 1u);
+  EXPECT_TRUE(nl.needs_rebuild(g, {}, skin));
+
+  // The same state in a store without the thermal fields (a mechanical case resuming the
+  // thermal run's checkpoint): rebuilt from the thermal reference, the lists are the thermal
+  // run's and still count the growth since; the next build drops the radii.
+  ParticleStore m = g;
+  m.disable_thermal();
+  NeighborList r;
+  r.hist.stride = r.whist.stride = 8;
+  std::vector<Wall> none;
+  r.rebuild_at(m, none, mech.d, skin, 0.0, built);
+  EXPECT_EQ(r.start, nl.start);
+  EXPECT_EQ(r.jdx, nl.jdx);
+  EXPECT_EQ(m.radius, g.radius);  // the current radii are left as they are
+  ASSERT_TRUE(r.tracks_radii());
+  EXPECT_TRUE(r.needs_rebuild(m, {}, skin)) << "radius growth since the reference's build not counted";
+  r.build(m, {}, mech.d, skin, 0.0, false);
+  EXPECT_FALSE(r.tracks_radii());
+  bool now_listed = false;
+  for (uint32_t k = r.start[std::min(a, c)]; k < r.start[std::min(a, c) + 1]; ++k)
+    now_listed = now_listed || r.jdx[k] == std::max(a, c);
+  EXPECT_TRUE(now_listed);
+  // A mechanical reference (no radii) rebuilds a mechanical store's lists exactly.
+  NeighborList r2;
+  r2.hist.stride = r2.whist.stride = 8;
+  r2.rebuild_at(mech.p, none, mech.d, skin, 0.0, mech.nl.reference());
+  EXPECT_FALSE(r2.tracks_radii());
+  EXPECT_EQ(r2.start, mech.nl.start);
+  EXPECT_EQ(r2.jdx, mech.nl.jdx);
+}
