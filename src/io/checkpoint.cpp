@@ -158,10 +158,6 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   in.vec(P.radius); in.vec(P.radius0); in.vec(P.mass); in.vec(P.inertia);
   in.vec(P.x); in.vec(P.v); in.vec(P.omega); in.vec(P.force); in.vec(P.torque);
   in.vec(P.temperature); in.vec(P.heat_flow);
-  // The thermal fields: written by runs that keep them (ParticleStore::enable_thermal),
-  // empty otherwise. A thermal case resuming a mechanical run's checkpoint starts every
-  // particle at its initial temperature, with its current radius as the reference; a
-  // mechanical case drops a thermal run's.
   const size_t n = P.id.size();
   auto bad = [&](const char* what) {
     throw InputError(path.string(), 0, "", std::string("checkpoint's ") + what + " do not match its particles");
@@ -170,15 +166,12 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
       P.inertia.size() != n || P.x.size() != n || P.v.size() != n || P.omega.size() != n || P.force.size() != n ||
       P.torque.size() != n)
     bad("particle arrays");
+  // The thermal fields: written by runs that keep them (ParticleStore::enable_thermal),
+  // empty otherwise. A thermal case resuming a mechanical run's checkpoint starts every
+  // particle at its initial temperature, with its current radius as the reference; a
+  // mechanical case drops a thermal run's.
   for (const std::vector<double>* a : {&P.radius0, &P.temperature, &P.heat_flow})
     if (!a->empty() && a->size() != n) bad("thermal fields");
-  // The wall indices: written by runs with attached particles (ParticleStore::attach), empty
-  // otherwise (checkpoints before that change hold -1 for every unattached particle).
-  if (!P.body.empty() && P.body.size() != n) bad("wall attachments");
-  for (size_t i = 0; i < n; ++i)
-    if (P.flag[i] == kAttached && (P.body.empty() || P.body[i] < 0 || size_t(P.body[i]) >= s.walls.size()))
-      bad("wall attachments");
-  if (std::find(P.flag.begin(), P.flag.end(), uint8_t(kAttached)) == P.flag.end()) std::vector<int32_t>().swap(P.body);
   if (s.thermal)
     P.enable_thermal(s.cfg.initial_temperature);
   else
@@ -190,6 +183,14 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
     w.force = in.pod<Vec3>(); w.torque = in.pod<Vec3>(); w.velocity = in.pod<Vec3>(); w.omega = in.pod<Vec3>();
     w.target_force = in.pod<double>();
   }
+  // The wall indices: written by runs with attached particles (ParticleStore::attach), empty
+  // otherwise (checkpoints before that change hold -1 for every unattached particle, dropped
+  // here when none is attached). Each attached particle names one of the case's walls.
+  if (!P.body.empty() && P.body.size() != n) bad("wall attachments");
+  for (size_t i = 0; i < n; ++i)
+    if (P.flag[i] == kAttached && (P.body.empty() || P.body[i] < 0 || size_t(P.body[i]) >= s.walls.size()))
+      bad("wall attachments");
+  if (std::find(P.flag.begin(), P.flag.end(), uint8_t(kAttached)) == P.flag.end()) std::vector<int32_t>().swap(P.body);
   if (in.pod<uint64_t>() != s.pours.size())
     throw InputError(path.string(), 0, "insert", "checkpoint has a different number of pour sources than the case");
   for (PourSource& p : s.pours) { p.inserted = in.pod<uint64_t>(); p.next_time = in.pod<double>(); }

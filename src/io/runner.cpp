@@ -540,8 +540,9 @@ int check_case(const Case& c) {
   // 2 kB a particle): per particle, the particle arrays (157 bytes, particles/particle_store.hpp;
   // 4 more with particles attached to walls: their wall; 24 more with [thermal]: reference
   // radius, temperature, heat flow), the lists' per-particle arrays and reference state (80;
-  // 8 more with [thermal]: the radii at the build) and the force loop's reverse sums (48); per entry of the half list, partner, image, transposed index, live flag, the pair
-  // as found at a build (9) and the history record, with the lists' eighth of headroom; per
+  // 8 more with [thermal]: the radii at the build) and the force loop's reverse sums (48);
+  // per entry of the half list, partner, image, transposed index, live flag, the pair as
+  // found at a build (9) and the history record, with the lists' eighth of headroom; per
   // contact, the copy a build makes of it (partner and record). The half list of a bed at
   // random close packing (solids fraction 0.64) holds 0.5 x 0.64 x 8 (1 + skin / d)^3
   // entries per particle of diameter d (here the particles' volume-mean diameter; d = 1,
@@ -556,7 +557,8 @@ int check_case(const Case& c) {
     const double entries = 0.5 * 0.64 * 8 * std::pow(1 + skin / d, 3);
     const double rec = double(s.model->state_size());
     const double per_particle =
-        157 + (attached ? 4 : 0) + (c.thermal.enabled ? 24 + 8 : 0) + 80 + 48 + 1.125 * entries * (19 + rec) + 3 * (4 + rec);
+        157 + (attached ? 4 : 0) + (c.thermal.enabled ? 24 + 8 : 0) + 80 + 48 + 1.125 * entries * (19 + rec) +
+        3 * (4 + rec);
     const double bytes = 7.0 * 1048576 + total * per_particle;
     fmt::print("memory estimate: {:.1f} MiB for the time loop on one thread ({:.0f} bytes per particle, ~{:.1f} list entries each in a dense bed)\n",
                bytes / 1048576.0, bytes / total, entries);

@@ -166,8 +166,8 @@ class NeighborList {
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - ref_.x[i]); }
 
   /// The state the lists were last built from (positions, radii where tracks_radii(), wall
-  /// points): a checkpoint saves it, and rebuild_at() rebuilds exactly the same lists from it, so a restart at any
-  /// step (not only at a rebuild step) continues bit for bit.
+  /// points): a checkpoint saves it, and rebuild_at() rebuilds exactly the same lists from
+  /// it, so a restart at any step (not only at a rebuild step) continues bit for bit.
   struct Reference {
     std::vector<Vec3> x;
     std::vector<double> r;  ///< empty where radii cannot have changed (no thermal model)
