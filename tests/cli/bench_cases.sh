@@ -5,7 +5,8 @@
 # steps, model_cost.py prints its four rows, instructions.py counts a small packing,
 # contact_instructions.py the force loop's instructions per contact of two laws,
 # scaling.py gives its table for a small gas (with --ceiling and --per-core),
-# peer_compare.py pins its rounds to the cores, and targets.py measures and judges issue 6's
+# peer_compare.py pins its rounds to the cores, contention.py runs it beside a memory hog,
+# and targets.py measures and judges issue 6's
 # targets (its --quick run, with scaling.py --lammps through a stand-in lmp, and its verdicts
 # on figures at the bounds).
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
@@ -140,6 +141,24 @@ ok = r['cpu'] == [cores[k % len(cores)] for k in range(2)] and len(r['rate']) ==
 ok = ok and r['particles'] == 32000 and len(r['peak_rss_bytes']) == 2 and 100 < r['bytes_per_particle'] < 1e5
 ok = ok and 100 < r['run_bytes_per_particle'] <= r['bytes_per_particle']
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning, memory"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
+# contention.py end to end (cohdem alone, one round of one run of 3 steps; it needs two
+# cores, as CI has): both invocations pinned to the last core this process may use, the hog
+# stopped afterwards (no process of it left), and the summary line for the problem printed.
+if [ "$(python3 -c 'import os; print(len(os.sched_getaffinity(0)))')" -ge 2 ]; then
+  if python3 "$src/bench/contention.py" --peers "" --rounds 1 --runs 1 --steps 3 --cohdem "$bin" \
+       --chute-data "$data" --out "$work/ct" > "$work/ct.log" 2>&1 &&
+     ! pgrep -f "$work/ct/hog" > /dev/null &&
+     grep -q "^chute: with the hog cohdem runs at" "$work/ct.log" &&
+     python3 -c "
+import json, os, sys
+last = sorted(os.sched_getaffinity(0))[-1]
+cpus = [json.load(open('$work/ct/' + m + '/results.json'))['results']['chute']['codes']['cohdem']['cpu'] for m in ('quiet1', 'hog1')]
+sys.exit(0 if cpus == [[last], [last]] else 1)"; then
+    pass=$((pass+1)); echo "ok   contention.py"
+  else
+    echo "FAIL contention.py"; tail -5 "$work/ct.log"; fail=$((fail+1))
+  fi
+fi
 # peer_compare.py's memory of an MPI job, without mpirun (not installed in CI): two "ranks"
 # under its RANK_WRAPPER, each touching 60 MB, started together by a shell; sh() sums the
 # ranks' own peaks (each above 60 MB, so the sum above 120 MB, and below 2 x 200 MB); a
