@@ -186,10 +186,7 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   // The wall indices: written by runs with attached particles (ParticleStore::attach), empty
   // otherwise (checkpoints before that change hold -1 for every unattached particle, dropped
   // here when none is attached). Each attached particle names one of the case's walls.
-  if (!P.body.empty() && P.body.size() != n) bad("wall attachments");
-  for (size_t i = 0; i < n; ++i)
-    if (P.flag[i] == kAttached && (P.body.empty() || P.body[i] < 0 || size_t(P.body[i]) >= s.walls.size()))
-      bad("wall attachments");
+  if ((!P.body.empty() && P.body.size() != n) || P.first_bad_attachment(s.walls.size()) < n) bad("wall attachments");
   if (std::find(P.flag.begin(), P.flag.end(), uint8_t(kAttached)) == P.flag.end()) std::vector<int32_t>().swap(P.body);
   if (in.pod<uint64_t>() != s.pours.size())
     throw InputError(path.string(), 0, "insert", "checkpoint has a different number of pour sources than the case");

@@ -50,6 +50,13 @@ struct ParticleStore {
     flag[i] = kAttached;
     body[i] = wall;
   }
+  /// The first particle flagged as attached that names none of `nwalls` walls (the carrying
+  /// and the walls' force sums index the walls by body[i]), or size() if there is none.
+  size_t first_bad_attachment(size_t nwalls) const {
+    for (size_t i = 0; i < size(); ++i)
+      if (flag[i] == kAttached && (body.size() != size() || body[i] < 0 || size_t(body[i]) >= nwalls)) return i;
+    return size();
+  }
 
   /// Appends one particle; returns its local index.
   size_t add(uint64_t pid, int32_t sp, double r, double density, const Vec3& pos,

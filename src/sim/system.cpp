@@ -70,13 +70,10 @@ void System::prepare_reach() {
   // without them starts at the initial temperature), before any re-sort permutes them.
   if (thermal) particles.enable_thermal(cfg.initial_temperature);
   if (cfg.threads > 0) omp_set_num_threads(cfg.threads);
-  // Every particle attached to a wall names one (ParticleStore::attach): the carrying and the
-  // walls' force sums index the walls by it.
-  const ParticleStore& P = particles;
-  for (size_t i = 0; i < P.size(); ++i)
-    if (P.flag[i] == kAttached && (P.body.size() != P.size() || P.body[i] < 0 || size_t(P.body[i]) >= walls.size()))
-      throw RunError("particle " + std::to_string(P.id[i]) + " is flagged as attached but names no wall of the " +
-                     std::to_string(walls.size()) + " (ParticleStore::attach)");
+  // Every particle attached to a wall names one (ParticleStore::attach).
+  if (const size_t i = particles.first_bad_attachment(walls.size()); i < particles.size())
+    throw RunError("particle " + std::to_string(particles.id[i]) + " is flagged as attached but names no wall of the " +
+                   std::to_string(walls.size()) + " (ParticleStore::attach)");
   double rmax = 0;
   for (double r : particles.radius) rmax = std::max(rmax, r);
   for (const auto& p : pours) rmax = std::max(rmax, p.spec.size.max_radius());
