@@ -2,7 +2,7 @@
 // (docs/performance.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
 // machine before a benchmark session.
 //
-//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|OmpSync'
+//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|OmpSync|Streams'
 //
 // How long data stays in this core's caches while the core does something else: the force
 // calls right after a neighbor-list build run slower, and so do those after a pause of the
@@ -22,6 +22,21 @@
 // written line from one core to the other. Every handing of data between threads pays it:
 // OpenMP's fork, join and barriers, and any line that one thread writes and the other reads
 // (in the force loop, the particles at a block boundary).
+//
+// BM_Streams/streams:<K>/layout:<0|1|2>: how many sequential streams one core keeps
+// prefetched. Each step of the loop updates element i of K streams (a record of three
+// doubles: reads two, writes the third), the way the force loop's finish walks a particle's
+// position, velocity, spin, force, torque, ... arrays side by side. Layout 0: K separate
+// arrays, each starting 1088 bytes (17 lines) further into its page than the one before (no
+// two streams share an L1 set at the same element); layout 1: one array of K-record
+// structures (the same bytes, one stream); layout 2: K separate arrays all at the same offset
+// within their pages (what large vectors get from mmap: cohdem's particle arrays at 10^6
+// particles). 2^19 elements a stream (12 MiB, beyond the caches). The rate in bytes per second
+// counts the records' bytes once. On the twenty-sixth round's Zen 4 VM (thirty-second round in
+// docs/performance.md): layout 1 holds 19-26 GB/s at any K; layout 0 16-18 GB/s up to 16
+// streams and 9-11 from 18; layout 2 falls to 5-8 GB/s from 12 streams. Whole runs of cohdem
+// did not follow (the same section): five fewer streams, or the arrays staggered, left the
+// 10^6 gas where it was.
 //
 // BM_OmpSync/threads:2/kind:<0|1>: what OpenMP's synchronisation costs on two threads, per
 // operation: kind 0 an empty parallel region (fork and join, what the force loop pays once
@@ -164,6 +179,57 @@ void BM_OmpSync(benchmark::State& st) {
   st.counters["time_per_op"] =
       benchmark::Counter(double(st.iterations()) * kOps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+
+void BM_Streams(benchmark::State& st) {
+  const size_t k_streams = size_t(st.range(0));
+  const int layout = int(st.range(1));
+  constexpr size_t kN = size_t(1) << 19;           // elements a stream
+  constexpr size_t kRec = 3;                       // doubles a record
+  constexpr size_t kArray = kN * kRec;             // doubles an array (a whole number of pages)
+  constexpr size_t kStagger = 1088 / sizeof(double);  // 17 lines
+  const size_t gap = layout == 0 ? kStagger : 0;
+  std::vector<double> buf(k_streams * (kArray + gap) + 8);
+  // 64-byte aligned start; arrays k at k * (kArray + gap) (layout 1 uses the buffer as one array).
+  double* const base = reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(buf.data()) + 63) & ~uintptr_t(63));
+  std::vector<double*> arr(k_streams);
+  for (size_t k = 0; k < k_streams; ++k) arr[k] = base + k * (kArray + gap);
+  for (size_t q = 0; q < k_streams * kArray; ++q) base[q] = 1e-9 * double(q % 1000);
+  double total = 0;
+  for (auto _ : st) {
+    if (layout == 1) {
+      for (size_t i = 0; i < kN; ++i) {
+        double s = 0;
+        double* const p = base + i * kRec * k_streams;
+        for (size_t k = 0; k < k_streams; ++k) {
+          s += p[kRec * k] * p[kRec * k + 1];
+          p[kRec * k + 2] = s;
+        }
+      }
+    } else {
+      double* const* const a = arr.data();
+      for (size_t i = 0; i < kN; ++i) {
+        double s = 0;
+        for (size_t k = 0; k < k_streams; ++k) {
+          double* const p = a[k] + kRec * i;
+          s += p[0] * p[1];
+          p[2] = s;
+        }
+      }
+    }
+    benchmark::ClobberMemory();
+    total += base[2];
+  }
+  benchmark::DoNotOptimize(total);
+  st.SetBytesProcessed(int64_t(st.iterations()) * int64_t(kN * kRec * sizeof(double) * k_streams));
+  st.counters["ns_per_element"] =
+      benchmark::Counter(double(st.iterations()) * double(kN), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+BENCHMARK(BM_Streams)
+    ->ArgsProduct({{4, 8, 12, 16, 18, 20, 24}, {0, 1, 2}})
+    ->ArgNames({"streams", "layout"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK(BM_OmpSync)
     ->ArgsProduct({{2}, {0, 1}})
