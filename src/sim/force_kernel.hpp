@@ -13,7 +13,9 @@
 //   order, adds that to i's own row sum, then i's wall contacts, then the body force; when
 //   asked (ForceContext::kick_h), it then gives i's velocities velocity Verlet's closing
 //   half-kick, no row read after pass 2 of i using them, and, when asked too
-//   (ForceContext::open_dt), the next step's opening half-kick and drift.
+//   (ForceContext::open_dt), the next step's opening half-kick and drift. With that fused
+//   opening and the AVX2 paths, free particles without wall entries are finished four at a
+//   time in AVX2 registers (sim/finish.hpp: the same operations, the same results).
 // Every sum has an order fixed by the lists, so results are bit-identical for any thread
 // count. Each thread (one parallel region) runs pass 1 over a contiguous block of particles
 // (of about equal work: PairSlots::plan, corrected by the threads' measured sweep times,
@@ -41,6 +43,7 @@
 
 #include "models/model_impl.hpp"
 #include "sim/force_context.hpp"
+#include "sim/finish.hpp"
 #include "sim/lanes.hpp"
 #include "sim/screen.hpp"
 
@@ -353,6 +356,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         drift.frozen = true;
       }
     };
+    // The finish of free particles four at a time (finish.hpp): with the fused opening, where
+    // the AVX2 paths run.
+    const bool vec_finish = simd && kick_h > 0 && open_dt > 0;
+    const FinishFree ff{x, v, omega, force, torque, rev, mass, inertia, flag, wstart,
+                        vec_finish ? nl.reference().x.data() : nullptr, grav, kick_h, open_dt};
     // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
     auto block = [&](const long t) __attribute__((always_inline)) {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
@@ -388,6 +396,16 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
             finish.template operator()<true>(next, a, b, drift);
           else
             defer(next);
+        }
+        // Local particles: four at a time in AVX2 registers where they can (free, no wall
+        // entries, the fused opening: finish.hpp), else one at a time (at most four, then
+        // the registers again).
+        if (vec_finish) {
+          while (next < i) {
+            next = finish_free_avx2(ff, next, i, drift);
+            for (const long stop = std::min(i, next + 4); next < stop; ++next)
+              finish.template operator()<true>(next, a, b, drift);
+          }
         }
         for (; next < i; ++next) finish.template operator()<true>(next, a, b, drift);
         swept_to(next);  // every particle before `next` is finished or deferred

@@ -8,6 +8,8 @@
 # kept out of line on purpose: only particles with wall entries call it), the thread
 # split's set-up (PairSlots, once per list build), the AVX2 screening of a batch
 # (screen_avx2: compiled for AVX2 alone, so it cannot be inlined into the portable kernel),
+# the finish of free particles four at a time (finish_free_avx2: one call per run of them,
+# AVX2 alone for the same reason),
 # the contacts of the laws with lanes (linear_, hertz_, mepa_lanes_avx2 and their _epsd_
 # forms: one call per 16 contacts, AVX2 alone for the same reason) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
 # libgomp; operator new/delete) are allowed. Skipped, saying so, for a build that is not
@@ -30,7 +32,7 @@ objdump -d --no-show-raw-insn -C "$bin" | awk '
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/) next
     bad[t]++
   }
   END {

@@ -1,0 +1,40 @@
+// The force loop's finish of free particles four at a time in AVX2 registers (see
+// src/sim/force_kernel.hpp, pass 2): the same operations, in the same order, as the scalar
+// finish of one particle, so the results are the same bit for bit.
+#pragma once
+#include <cstdint>
+
+#include "core/vec3.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "sim/force_context.hpp"
+
+namespace cohdem {
+
+/// What the finish of a free particle reads and writes, with the fused opening of the next
+/// step (ForceContext::kick_h > 0 and open_dt > 0).
+struct FinishFree {
+  Vec3* x;
+  Vec3* v;
+  Vec3* omega;
+  Vec3* force;   ///< the row sums in, the particle's force out
+  Vec3* torque;  ///< the same for the torque
+  PairResult* rev;  ///< the reverse sums of local particles, read and zeroed
+  const double* mass;
+  const double* inertia;
+  const uint8_t* flag;
+  const uint32_t* wstart;  ///< the lists' wall-entry starts (n + 1)
+  const Vec3* ref;         ///< the lists' reference positions (the drift since the build)
+  Vec3 grav;
+  double kick_h;
+  double open_dt;
+};
+
+/// Finishes the particles [i, e) four at a time, from i on, as long as all four of a group
+/// are free and have no wall entries, as the scalar finish does for a local particle: its
+/// reverse sums added to its row sums (and zeroed), gravity, the closing half-kick, the next
+/// step's opening half-kick and drift, and the drift since the build into d. Returns the
+/// first particle it did not finish (a group it may not take, or fewer than four left).
+/// x86-64 with AVX2 only: call it only when screen_avx2_enabled().
+long finish_free_avx2(const FinishFree& f, long i, long e, Drift& d);
+
+}  // namespace cohdem
