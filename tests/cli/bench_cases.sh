@@ -6,8 +6,8 @@
 # contact_instructions.py the force loop's instructions per contact of two laws,
 # scaling.py gives its table for a small gas (with --ceiling and --per-core),
 # peer_compare.py pins its rounds to the cores, contention.py runs it beside a memory hog,
-# and targets.py measures and judges issue 6's
-# targets (its --quick run, with scaling.py --lammps through a stand-in lmp, and its verdicts
+# ab.py pairs two binaries' runs (an A/A control), and targets.py measures and judges issue
+# 6's targets (its --quick run, with scaling.py --lammps through a stand-in lmp, and its verdicts
 # on figures at the bounds).
 # LAMMPS's chute data comes from ../shared beside the repository (as in CI). Speed itself is
 # measured by the scripts, not here.
@@ -274,5 +274,21 @@ checks += [not met(status(with_lammps(1.21, 1.0), 1)), met(status(with_lammps(1.
 sys.exit(0 if all(checks) else 1)
 PY
 then pass=$((pass+1)); echo "ok   targets.py verdicts at the bounds"; else echo "FAIL targets.py verdicts"; fail=$((fail+1)); fi
+# ab.py end to end: a binary against itself (an A/A control) on the packing of the cases
+# above, 3 steps a run, alternated and together (the latter needs two cores): both end with
+# the same bits; an environment the binary honours (COHDEM_SIMD=0, the scalar screening and
+# laws, the same results by design) keeps them too; a missing binary is refused by name.
+ab_ok=1
+python3 "$src/bench/ab.py" "$work/packing.toml" --a "$bin" --duration 3e-4 --rounds 2 > "$work/ab1.log" 2>&1 &&
+  grep -q "^B/A paired: median" "$work/ab1.log" && grep -q "^same bits .*: yes$" "$work/ab1.log" || ab_ok=0
+python3 "$src/bench/ab.py" "$work/packing.toml" --a "$bin" --env-b "COHDEM_SIMD=0" --duration 3e-4 --rounds 1 > "$work/ab2.log" 2>&1 &&
+  grep -q "^same bits .*: yes$" "$work/ab2.log" || ab_ok=0
+if [ "$(python3 -c 'import os; print(len(os.sched_getaffinity(0)))')" -ge 2 ]; then
+  python3 "$src/bench/ab.py" "$work/packing.toml" --a "$bin" --b "$bin" --together --duration 3e-4 --rounds 4 > "$work/ab3.log" 2>&1 &&
+    grep -q "^B/A over whole cycles" "$work/ab3.log" && grep -q "^same bits .*: yes$" "$work/ab3.log" || ab_ok=0
+fi
+python3 "$src/bench/ab.py" "$work/packing.toml" --a "$work/no_such_cohdem" --rounds 1 > "$work/ab4.log" 2>&1 && ab_ok=0
+grep -q "no_such_cohdem' is not an executable file" "$work/ab4.log" || ab_ok=0
+if [ "$ab_ok" -eq 1 ]; then pass=$((pass+1)); echo "ok   ab.py"; else echo "FAIL ab.py"; tail -3 "$work"/ab*.log; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""A/B timing of two cohdem binaries (or two environments of one) on one case, the way the
+rounds in docs/performance.md ("What was changed for speed") measure each change.
+
+  python3 bench/ab.py CASE --a OLD/cohdem --b build/cohdem --duration 0.5 --rounds 10
+  python3 bench/ab.py CASE --a build/cohdem --env-b "COHDEM_SIMD=0" --rounds 8
+  python3 bench/ab.py CASE --a OLD/cohdem --b build/cohdem --together --rounds 16
+
+This machine's host moves a run's speed by up to 2.5x from minute to minute, so one run of
+each says nothing about a change of a few per cent. Two ways to pair the runs:
+
+* alternated (the default): each round runs A and B one after the other, one thread, both
+  pinned to the same core (core 0 in even rounds, core 1 in odd ones), A first in even
+  rounds and B first in odd ones; the ratio B/A is taken round by round and its median
+  quoted, with the medians and the best of each side.
+* --together: each round runs A on one core and B on the other at the same time, so the two
+  see the same spell of the host. The run started second ends later, with the other core
+  idle for its last moments, which can favour it (one A/A control with B always started
+  second gave B/A 1.04-1.21, median 1.08): so the start order alternates every round and the
+  cores every two rounds, and each cycle of four rounds (both orders on both assignments)
+  is combined by its geometric mean; the median of those is quoted. Use a multiple of four
+  rounds.
+
+A change is worth a claim only where the pairs agree; with 8-16 rounds a single ratio
+within about 3-5 % of 1 is within this machine's noise (run the A/A control, --b equal to
+--a, in the same spell to see the spread).
+
+Every run ends with its kinetic energy and contact count in summary.json; the script
+reports whether A and B ended with the same bits (as a change that only reorders work must).
+Python 3 standard library only; needs `taskset` (util-linux) for the pinning.
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def parse_env(text):
+    env = {}
+    for kv in (text or "").split():
+        if "=" not in kv:
+            sys.exit(f"ab.py: --env-a/--env-b: expected KEY=VALUE, got '{kv}'")
+        k, v = kv.split("=", 1)
+        env[k] = v
+    return env
+
+
+def start(binary, env_extra, case, a, core, out):
+    env = dict(os.environ)
+    env.update(env_extra)
+    cmd = [binary, "run", case, "--set", f"simulation.duration={a.duration!r}", "--threads", str(a.threads),
+           "--out", out, "--quiet"]
+    if core is not None and shutil.which("taskset"):
+        cmd = ["taskset", "-c", str(core)] + cmd
+    return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env, text=True)
+
+
+def finish(proc, out, label):
+    _, err = proc.communicate()
+    if proc.returncode != 0:
+        sys.exit(f"ab.py: {label} failed (exit {proc.returncode}):\n{err[-2000:]}")
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    return s["particle_steps_per_s"], (s["kinetic_energy"], s["contacts"])
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("case", help="a cohdem case file")
+    ap.add_argument("--a", required=True, help="binary A (the reference)")
+    ap.add_argument("--b", help="binary B (default: A, with --env-b)")
+    ap.add_argument("--env-a", default="", help="environment for A's runs, 'KEY=VALUE ...'")
+    ap.add_argument("--env-b", default="", help="environment for B's runs, 'KEY=VALUE ...'")
+    ap.add_argument("--duration", type=float, default=0.1, help="simulated seconds per run (simulation.duration)")
+    ap.add_argument("--rounds", type=int, default=8)
+    ap.add_argument("--threads", type=int, default=1, help="threads per run (pinned only with 1)")
+    ap.add_argument("--together", action="store_true", help="A and B at once, one per core, cores swapped each round")
+    a = ap.parse_args()
+    if a.rounds < 1:
+        sys.exit("ab.py: --rounds: expected at least 1")
+    if not (a.duration > 0 and math.isfinite(a.duration)):
+        sys.exit("ab.py: --duration: expected a positive number of seconds")
+    if not os.path.isfile(a.case):
+        sys.exit(f"ab.py: case file '{a.case}' not found")
+    b_bin = a.b or a.a
+    for label, path in (("--a", a.a), ("--b", b_bin)):
+        if not (os.path.isfile(path) and os.access(path, os.X_OK)):
+            sys.exit(f"ab.py: {label}: '{path}' is not an executable file")
+    env_a, env_b = parse_env(a.env_a), parse_env(a.env_b)
+    if a.together and (os.cpu_count() or 1) < 2:
+        sys.exit("ab.py: --together needs two cores")
+    pin = a.threads == 1
+    work = tempfile.mkdtemp(prefix="cohdem_ab_")
+    ra, rb, ratio, same = [], [], [], True
+    try:
+        for r in range(a.rounds):
+            oa, ob = os.path.join(work, "a"), os.path.join(work, "b")
+            if a.together:
+                # Started one after the other, the second run's loop ends later, with the other
+                # core idle for a while: the start order alternates every round, the cores every
+                # two rounds.
+                ca, cb = (0, 1) if (r // 2) % 2 == 0 else (1, 0)
+                if r % 2 == 0:
+                    pa = start(a.a, env_a, a.case, a, ca if pin else None, oa)
+                    pb = start(b_bin, env_b, a.case, a, cb if pin else None, ob)
+                else:
+                    pb = start(b_bin, env_b, a.case, a, cb if pin else None, ob)
+                    pa = start(a.a, env_a, a.case, a, ca if pin else None, oa)
+                (xa, ea), (xb, eb) = finish(pa, oa, "A"), finish(pb, ob, "B")
+                first = "A" if r % 2 == 0 else "B"
+                where = f"A core {ca}, B core {cb}, {first} started first" if pin else f"unpinned, {first} first"
+            else:
+                core = r % 2 if pin else None
+                res = {}
+                for side in (("a", "b") if r % 2 == 0 else ("b", "a")):
+                    binary, env, out = (a.a, env_a, oa) if side == "a" else (b_bin, env_b, ob)
+                    res[side] = finish(start(binary, env, a.case, a, core, out), out, side.upper())
+                (xa, ea), (xb, eb) = res["a"], res["b"]
+                where = f"core {core}, {'A' if r % 2 == 0 else 'B'} first" if pin else "unpinned"
+            ra.append(xa)
+            rb.append(xb)
+            ratio.append(xb / xa)
+            same = same and ea == eb
+            print(f"round {r + 1:2d} ({where}): A {xa:.4g}  B {xb:.4g} particle-steps/s  B/A {xb / xa:.3f}", flush=True)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    print(f"\n{a.case}, {a.duration!r} s simulated, {a.threads} thread(s), {a.rounds} rounds"
+          f"{' (together)' if a.together else ' (alternated)'}")
+    print(f"A: median {statistics.median(ra):.4g}, best {max(ra):.4g} particle-steps/s")
+    print(f"B: median {statistics.median(rb):.4g}, best {max(rb):.4g} particle-steps/s")
+    print(f"B/A paired: median {statistics.median(ratio):.3f} (rounds {min(ratio):.3f}-{max(ratio):.3f})")
+    if a.together and len(ratio) >= 4:
+        cyc = [math.prod(ratio[q:q + 4]) ** 0.25 for q in range(0, len(ratio) - 3, 4)]
+        print(f"B/A over whole cycles (geometric mean of each four rounds: both start orders on both"
+              f" core assignments): median {statistics.median(cyc):.3f} ({' '.join(f'{c:.3f}' for c in cyc)})")
+    print(f"same bits (kinetic energy and contacts of every run): {'yes' if same else 'no'}")
+
+
+if __name__ == "__main__":
+    main()
