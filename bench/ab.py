@@ -27,7 +27,7 @@ within about 3-5 % of 1 is within this machine's noise (run the A/A control, --b
 
 Every run ends with its kinetic energy and contact count in summary.json; the script
 reports whether A and B ended with the same bits (as a change that only reorders work must).
-Python 3 standard library only; needs `taskset` (util-linux) for the pinning.
+Python 3 standard library only; runs are pinned and checked by peer_compare.py's `sh`.
 """
 import argparse
 import json
@@ -35,9 +35,13 @@ import math
 import os
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import peer_compare as pc  # noqa: E402  (sh: a run pinned to a core, its failure raised with its log)
 
 
 def parse_env(text):
@@ -50,20 +54,13 @@ def parse_env(text):
     return env
 
 
-def start(binary, env_extra, case, a, core, out):
+def run(binary, env_extra, case, a, core, out):
+    """One run of binary on case (pinned to core unless None): its rate and its final state."""
     env = dict(os.environ)
     env.update(env_extra)
     cmd = [binary, "run", case, "--set", f"simulation.duration={a.duration!r}", "--threads", str(a.threads),
            "--out", out, "--quiet"]
-    if core is not None and shutil.which("taskset"):
-        cmd = ["taskset", "-c", str(core)] + cmd
-    return subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env, text=True)
-
-
-def finish(proc, out, label):
-    _, err = proc.communicate()
-    if proc.returncode != 0:
-        sys.exit(f"ab.py: {label} failed (exit {proc.returncode}):\n{err[-2000:]}")
+    pc.sh(cmd, None, out + ".log", cpu=core, env=env)
     with open(os.path.join(out, "summary.json")) as f:
         s = json.load(f)
     return s["particle_steps_per_s"], (s["kinetic_energy"], s["contacts"])
@@ -105,13 +102,11 @@ def main():
                 # core idle for a while: the start order alternates every round, the cores every
                 # two rounds.
                 ca, cb = (0, 1) if (r // 2) % 2 == 0 else (1, 0)
-                if r % 2 == 0:
-                    pa = start(a.a, env_a, a.case, a, ca if pin else None, oa)
-                    pb = start(b_bin, env_b, a.case, a, cb if pin else None, ob)
-                else:
-                    pb = start(b_bin, env_b, a.case, a, cb if pin else None, ob)
-                    pa = start(a.a, env_a, a.case, a, ca if pin else None, oa)
-                (xa, ea), (xb, eb) = finish(pa, oa, "A"), finish(pb, ob, "B")
+                jobs = [("a", a.a, env_a, ca, oa), ("b", b_bin, env_b, cb, ob)]
+                with ThreadPoolExecutor(2) as ex:
+                    fut = {side: ex.submit(run, binary, env, a.case, a, core if pin else None, out)
+                           for side, binary, env, core, out in (jobs if r % 2 == 0 else jobs[::-1])}
+                (xa, ea), (xb, eb) = fut["a"].result(), fut["b"].result()
                 first = "A" if r % 2 == 0 else "B"
                 where = f"A core {ca}, B core {cb}, {first} started first" if pin else f"unpinned, {first} first"
             else:
@@ -119,7 +114,7 @@ def main():
                 res = {}
                 for side in (("a", "b") if r % 2 == 0 else ("b", "a")):
                     binary, env, out = (a.a, env_a, oa) if side == "a" else (b_bin, env_b, ob)
-                    res[side] = finish(start(binary, env, a.case, a, core, out), out, side.upper())
+                    res[side] = run(binary, env, a.case, a, core, out)
                 (xa, ea), (xb, eb) = res["a"], res["b"]
                 where = f"core {core}, {'A' if r % 2 == 0 else 'B'} first" if pin else "unpinned"
             ra.append(xa)
@@ -127,6 +122,8 @@ def main():
             ratio.append(xb / xa)
             same = same and ea == eb
             print(f"round {r + 1:2d} ({where}): A {xa:.4g}  B {xb:.4g} particle-steps/s  B/A {xb / xa:.3f}", flush=True)
+    except RuntimeError as e:  # a run that failed: its command, exit status and log's end
+        sys.exit(f"ab.py: {e}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print(f"\n{a.case}, {a.duration!r} s simulated, {a.threads} thread(s), {a.rounds} rounds"

@@ -61,20 +61,20 @@ RANK_WRAPPER = ("import os, subprocess, sys\n"
                 "sys.exit(os.waitstatus_to_exitcode(st))\n")
 
 
-def sh(cmd, cwd, log, cpu=None, rank_dir=None, ranks=1):
+def sh(cmd, cwd, log, cpu=None, rank_dir=None, ranks=1, env=None):
     """Runs cmd (list), output to log; returns the output text and the run's peak resident
     memory in bytes. Raises on failure. cpu: the core the run is pinned to (None: not
     pinned). The memory is the kernel's high-water mark of the process (os.wait4's
     ru_maxrss), the same measure for every code: binary, libraries, input and all. For an
     MPI run whose `ranks` ranks run under RANK_WRAPPER writing to rank_dir, it is the sum of
     the ranks' high-water marks: the job's memory without the launcher (an upper bound when
-    the ranks peak at different times)."""
+    the ranks peak at different times). env: the run's environment (None: this process's)."""
     if rank_dir is not None:
         shutil.rmtree(rank_dir, ignore_errors=True)
         os.makedirs(rank_dir)
     pin = None if cpu is None else (lambda: os.sched_setaffinity(0, {cpu}))
     with open(log, "w") as f:
-        proc = subprocess.Popen(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin)
+        proc = subprocess.Popen(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, preexec_fn=pin, env=env)
         _, status, usage = os.wait4(proc.pid, 0)
         proc.returncode = os.waitstatus_to_exitcode(status)
     text = open(log).read()
