@@ -367,6 +367,12 @@ struct ForceContext {
   /// particles whose radii are as at the list build (no thermal model: System::step_once).
   double open_dt = 0;
   Drift* drift = nullptr;
+  /// When not null (needs the fused opening, one thread and no recording): the loop runs
+  /// the next step too, in the same sweep (System::step_pair), its displacements since the
+  /// build into *drift2. Its forces, kicks and drift are those of the next call to the loop
+  /// with the same lists: the caller must take that step only if the lists need no rebuild
+  /// after this one (*drift), and undo it otherwise.
+  Drift* drift2 = nullptr;
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
   /// Store every live pair's result in `pair` (otherwise only those gathered across thread

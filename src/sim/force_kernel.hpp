@@ -29,7 +29,8 @@
 // (always, on one thread); pairs of particles near a block boundary store their results,
 // gathered through the transposed index in the same order. Only WHEN and on which thread
 // pass 2 runs, and how the reverse sums are collected, depend on the thread count, never
-// what is summed or in which order.
+// what is summed or in which order. With ForceContext::drift2 (one thread), the next step
+// runs in the same sweep, a second cursor following the first (System::step_pair).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -120,6 +121,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n)) || nl.tracks_radii()))
     throw std::logic_error(
         "force loop: the fused opening needs the closing half-kick, a drift and a built list without radius growth");
+  if (c.drift2 != nullptr && (open_dt <= 0 || keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1)))
+    throw std::logic_error("force loop: two steps in one sweep need the fused opening, one thread and no recording");
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
@@ -446,7 +449,68 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       c.slots->hand_over(tid, own, epoch);
       hand_at = std::numeric_limits<long>::max();
     };
-    if (nt == 1)
+    if (c.drift2 != nullptr) {
+      // Two steps in one sweep (one thread): cursor A runs this step as `sweep` does, cursor
+      // B the next one, a batch at a time, once A has finished the batch's rows and every
+      // partner they hold (so B reads positions and velocities A has moved, and scatters
+      // into reverse sums A has read and zeroed). Each particle's arithmetic, and its order,
+      // is that of two separate calls; B works on data A touched one plane of cells before,
+      // still in cache at sizes where a whole sweep is not.
+      struct Cursor {
+        long next, i;  // the first particle not finished, the first row not done
+        uint32_t k;    // the first entry not screened
+      };
+      Cursor A{a, a, start[a]}, B{a, a, start[a]};
+      Drift drift_b;
+      // The batch after cursor C: its last row i1 and its end ke, as in `sweep`.
+      auto bounds = [&](const Cursor& C, long& i1, uint32_t& ke) __attribute__((always_inline)) {
+        ke = std::min(C.k + kBatch, start[b]);
+        i1 = C.i;
+        while (i1 < b && start[i1 + 1] <= ke) ++i1;
+      };
+      auto advance = [&](Cursor& C, Drift& d, const long i1, const uint32_t ke) __attribute__((always_inline)) {
+        batch.template operator()<true>(C.i, i1, C.k, ke, a, b);
+        C.i = i1;
+        C.k = ke;
+        long next = C.next;
+        if (vec_finish) {
+          while (next < i1) {
+            next = finish_free_avx2(ff, next, i1, d);
+            for (const long stop = std::min(i1, next + 4); next < stop; ++next)
+              finish.template operator()<true>(next, a, b, d);
+          }
+        }
+        for (; next < i1; ++next) finish.template operator()<true>(next, a, b, d);
+        C.next = next;
+      };
+      // B's next batch and the particle A must have finished past it (its highest row or
+      // partner), found once per batch.
+      long b_i1 = 0;
+      uint32_t b_ke = 0;
+      long b_need = -1;
+      auto run_b = [&]() __attribute__((always_inline)) {
+        while (B.i < b) {
+          if (b_need < 0) {
+            bounds(B, b_i1, b_ke);
+            uint32_t top = uint32_t(std::min(b_i1, b - 1));
+            for (uint32_t k = B.k; k < b_ke; ++k) top = std::max(top, jdx[k]);
+            b_need = long(top);
+          }
+          if (b_need >= A.next) return;
+          advance(B, drift_b, b_i1, b_ke);
+          b_need = -1;
+        }
+      };
+      while (A.i < b) {
+        long i1;
+        uint32_t ke;
+        bounds(A, i1, ke);
+        advance(A, drift, i1, ke);
+        run_b();
+      }
+      run_b();
+      c.drift2->merge(drift_b);
+    } else if (nt == 1)
       sweep.template operator()<true>(none, none);
     else
       sweep.template operator()<false>(

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <stdexcept>
+#include <string>
 
 #include "core/error.hpp"
 #include "core/grow.hpp"
@@ -213,7 +215,10 @@ void System::compute_forces(double kick_h, bool open_next) {
   // them: 48 bytes per list entry saved).
   if (ctx.needs_pair_buffer(long(particles.size()))) grow_to(pair_, np);
   model->compute(ctx);
+  sum_wall_loads();
+}
 
+void System::sum_wall_loads() {
   // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
   // of particles, then the blocks in order. Within a block, its wall entries in list order
   // (a contiguous range: the entries are stored particle by particle), then its particles
@@ -262,6 +267,12 @@ void System::compute_forces(double kick_h, bool open_next) {
 }
 
 void System::step_once(bool open_next) {
+  snap_.valid = false;  // a step of its own: step_pair's snapshot no longer leads here by pairs alone
+  begin_step();
+  end_step(open_next);
+}
+
+void System::begin_step() {
   if (dirty_) {
     if (opened_) throw std::logic_error("System: particles or walls changed in the middle of a step (step_once(true))");
     prepare();
@@ -337,6 +348,11 @@ void System::step_once(bool open_next) {
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
   }
+}
+
+void System::end_step(bool open_next) {
+  const double dt = cfg.dt, h = 0.5 * dt;
+  ParticleStore& P = particles;
   // The closing half-kick: applied by the force kernel to each particle as its force is
   // complete (one pass fewer), unless a thermal model changes radii and inertia first; so is
   // the next step's opening when the caller allows it (not with a thermal model either, nor
@@ -355,6 +371,138 @@ void System::step_once(bool open_next) {
   }
   control_walls(dt);
   opened_ = fuse;
+}
+
+bool System::pairs_allowed() const {
+  if (cfg.pair_min < 0 || long(particles.size()) < cfg.pair_min || !opened_ || dirty_ || thermal || !pours.empty() ||
+      cfg.record_contacts || !nl.attached.empty() || !nl.has_reference(particles.size()) || nl.tracks_radii())
+    return false;
+  if (long(particles.size()) > cfg.parallel_min && omp_get_max_threads() > 1) return false;
+  static const bool off = [] {
+    const char* e = std::getenv("COHDEM_PAIR");
+    return e != nullptr && std::string(e) == "0";
+  }();
+  if (off) return false;
+  // Walls that stay where they are: the second step's wall contacts are evaluated with the
+  // walls of the first.
+  for (const Wall& W : walls)
+    if (W.control != WallControl::Prescribed || !(W.velocity == Vec3{}) || W.vn != 0 || W.osc_amplitude != 0 ||
+        !(W.omega == Vec3{}))
+      return false;
+  return true;
+}
+
+void System::SparseHistory::take(const HistoryArray& h) {
+  k.clear();
+  live.clear();
+  rec.clear();
+  const size_t st = h.stride, n = h.live.size();
+  const std::byte* const d = h.data.data();
+  for (size_t e = 0; e < n; ++e) {
+    const std::byte* const r = d + e * st;
+    bool keep = h.live[e] != 0;
+    for (size_t b = 0; b < st && !keep; ++b) keep = r[b] != std::byte{0};
+    if (!keep) continue;
+    k.push_back(uint32_t(e));
+    live.push_back(h.live[e]);
+    rec.insert(rec.end(), r, r + st);
+  }
+}
+
+void System::SparseHistory::restore(HistoryArray& h) const {
+  const size_t st = h.stride;
+  std::fill(h.data.begin(), h.data.end(), std::byte{0});
+  std::fill(h.live.begin(), h.live.end(), uint8_t(0));
+  for (size_t q = 0; q < k.size(); ++q) {
+    if (st > 0) std::memcpy(h.data.data() + size_t(k[q]) * st, rec.data() + q * st, st);
+    h.live[k[q]] = live[q];
+  }
+}
+
+void System::take_snapshot() {
+  snap_.x = particles.x;
+  snap_.v = particles.v;
+  snap_.omega = particles.omega;
+  snap_.hist.take(nl.hist);
+  snap_.whist.take(nl.whist);
+  snap_.time = time;
+  snap_.step = step;
+  snap_.builds = nl.stats.builds;
+  snap_.pairs = 0;
+  snap_.valid = true;
+}
+
+void System::step_pair() {
+  if (!pairs_allowed()) {
+    step_once(true);
+    step_once(true);
+    return;
+  }
+  const uint64_t builds = nl.stats.builds;
+  begin_step();  // the first step's opening is done; the rebuild decision before it
+  // Near a rebuild (the displacements since the build past SimConfig::pair_margin of what
+  // triggers one): plain steps. A snapshot is taken after every list build
+  // and every kSnapPairs pairs since (its cost: a copy of the positions, velocities and
+  // spins and of the history's live records, and a read of the rest, about a twentieth of
+  // a step at that spacing).
+  constexpr uint64_t kSnapPairs = 32;
+  if (nl.stats.builds == builds && nl.rebuild_due(open_drift_, walls, cfg.pair_margin * cfg.skin)) {
+    snap_.valid = false;
+    end_step(true);
+    step_once(true);
+    return;
+  }
+  if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.pairs >= kSnapPairs) take_snapshot();
+  // Both steps in one sweep of the force loop (ForceContext::drift2).
+  const double dt = cfg.dt, h = 0.5 * dt;
+  const size_t nw = nl.wall_entry_count();
+  contacts_recorded_ = false;
+  if (rev_.size() < particles.size()) rev_.resize(particles.size());
+  if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
+  ForceContext ctx{particles, nl, walls, dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
+  ctx.parallel_min = cfg.parallel_min;
+  ctx.kick_h = h;
+  Drift first, second;
+  ctx.open_dt = dt;
+  ctx.drift = &first;
+  ctx.drift2 = &second;
+  ctx.keep_pair = false;
+  ctx.slots = &slots_;
+  model->compute(ctx);
+  ++pair_stats_.pairs;
+  if (nl.rebuild_due(first, walls, cfg.skin)) {
+    // The lists needed a rebuild between the two steps: back to the snapshot, and the steps
+    // since it again one at a time (the same arithmetic: the same states, the rebuild where
+    // plain steps take it).
+    ++pair_stats_.replays;
+    const uint64_t target = step + 1;
+    particles.x = snap_.x;
+    particles.v = snap_.v;
+    particles.omega = snap_.omega;
+    snap_.hist.restore(nl.hist);
+    snap_.whist.restore(nl.whist);
+    time = snap_.time;
+    step = snap_.step;
+    pair_stats_.replayed_steps += target - step;
+    end_step(true);
+    while (step < target) {
+      begin_step();
+      end_step(true);
+    }
+    snap_.valid = false;
+    return;
+  }
+  ++snap_.pairs;
+  // What plain steps do between and after the two force loops: the walls (which stay where
+  // they are) and the loads on them (from the second step's contacts).
+  control_walls(dt);
+  move_wall_geometry(dt);
+  time += dt;
+  ++step;
+  sum_wall_loads();
+  control_walls(dt);
+  open_drift_ = second;
+  opened_ = true;
 }
 
 void System::run(uint64_t nsteps, const std::function<void(const System&)>& after_step) {

@@ -1,0 +1,221 @@
+// System::step_pair evaluates two time steps in one sweep of the force loop (the second
+// step's rows a plane of cells behind the first's: ForceContext::drift2). Each particle's
+// arithmetic, and its order, is that of two plain steps, and when the neighbor lists turn out
+// to need a rebuild between the two, the state goes back to a snapshot and the steps since
+// are taken again one at a time. So a run of pairs must end in the same state, bit for bit,
+// as the same run of plain steps (step_once(true)): checked here on a box of colliding
+// spheres with a small skin, so that rebuilds fall between the two steps of a pair again and
+// again (the way back is taken) and also at pair boundaries, with frozen particles, wall
+// contacts and three contact laws, on the AVX2 and the scalar paths.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include "fixture.hpp"
+#include "sim/force_kernel.hpp"
+#include "sim/screen.hpp"
+
+using namespace cohdem;
+using namespace cohdem::testing;
+
+namespace {
+
+struct Law {
+  const char* model;
+  const char* rolling;
+  ParamSet p;
+};
+
+std::vector<Law> laws() {
+  return {
+      {"linear", "none", params({{"kn", 2e4}, {"e", 0.5}, {"mu", 0.5}})},
+      {"hertz_mindlin", "epsd", params({{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"eta_r", 0.3}})},
+      {"mepa", "epsd",
+       params({{"k1", 2e6},
+               {"k2", 1e7},
+               {"kadh", 1e6},
+               {"n", 1.5},
+               {"mu", 0.5},
+               {"gamma_n", 0.2},
+               {"mu_r", 0.1},
+               {"eta_r", 0.3}})},
+  };
+}
+
+// 3000 spheres of 1.5-2 mm in a box open at the top (floor and four sides at rest), with
+// random velocities of about 1 m/s and a skin of 0.1 mm: lists rebuilt every few steps, and
+// a sweep of about ten batches (sim/screen.hpp, kBatch), so that the second step's cursor
+// waits for the first's again and again.
+constexpr size_t kCount = 3000;
+std::unique_ptr<System> make_box(const Law& law) {
+  auto s =
+      make_system({{"glass", 2500, 5e7, 0.25}}, law.model, law.rolling, law.p, 5e-6, {0, 0, -9.81}, 1e-4);
+  const double L = 0.04 * std::sqrt(10.0), H = 0.018;
+  s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
+  s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, 0));
+  s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, 0));
+  s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, 0));
+  s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, 0));
+  InsertSpec spec;
+  spec.region.kind = Region::Kind::Box;
+  spec.region.lo = {0, 0, 0};
+  spec.region.hi = {L, L, H};
+  spec.size.kind = SizeDistribution::Kind::Uniform;
+  spec.size.rmin = 1.5e-3;
+  spec.size.rmax = 2.0e-3;
+  spec.count = kCount;
+  EXPECT_EQ(s->insert(spec), kCount);
+  Rng rng(7);
+  for (auto& v : s->particles.v) v = {rng.normal(), rng.normal(), rng.normal()};
+  for (size_t i = 0; i < 5; ++i) {  // frozen in place: they only mark the displacements' box
+    s->particles.flag[i] = kFrozen;
+    s->particles.v[i] = s->particles.omega[i] = Vec3{};
+  }
+  s->cfg.pair_min = 0;  // pairs for these few particles too
+  s->prepare();
+  return s;
+}
+
+struct End {
+  std::vector<uint64_t> id;
+  std::vector<Vec3> x, v, w;
+  Vec3 floor;
+  uint64_t builds = 0, step = 0;
+  double time = 0;
+  size_t contacts = 0;
+  System::PairStats pairs;
+};
+
+// `steps` steps (pairs near a rebuild only below `margin`, SimConfig::pair_margin): plain (step_once(true),
+// the last one closed), or in pairs where it can.
+End run(const Law& law, bool pairs, int steps, double margin) {
+  auto s = make_box(law);
+  s->cfg.pair_margin = margin;
+  int k = 0;
+  s->step_once(true);
+  ++k;
+  while (k < steps - 1) {
+    if (pairs && k + 2 < steps) {
+      s->step_pair();
+      k += 2;
+    } else {
+      s->step_once(true);
+      ++k;
+    }
+  }
+  s->step_once(false);
+  End e;
+  e.id = s->particles.id;
+  e.x = s->particles.x;
+  e.v = s->particles.v;
+  e.w = s->particles.omega;
+  e.floor = s->walls[0].force;
+  e.builds = s->nl.stats.builds;
+  e.step = s->step;
+  e.time = s->time;
+  e.contacts = s->contact_count();
+  e.pairs = s->pair_stats();
+  return e;
+}
+
+size_t differing(const End& a, const End& b) {
+  if (a.id != b.id) return a.id.size();
+  size_t d = 0;
+  for (size_t i = 0; i < a.x.size(); ++i) d += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+  return d;
+}
+
+}  // namespace
+
+TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
+  omp_set_num_threads(1);
+  constexpr int kSteps = 401;
+  const bool had_avx2 = screen_avx2_enabled();
+  for (bool simd : {true, false}) {
+    if (simd && !avx2_available()) continue;
+    set_screen_avx2(simd);
+    for (const Law& law : laws()) {
+      for (double margin : {0.75, 1.0}) {
+        const End a = run(law, false, kSteps, margin), b = run(law, true, kSteps, margin);
+        const std::string what =
+            std::string(law.model) + (simd ? " (AVX2)" : " (scalar)") + ", margin " + std::to_string(margin);
+        EXPECT_EQ(a.step, uint64_t(kSteps)) << what;
+        EXPECT_EQ(b.step, a.step) << what;
+        EXPECT_EQ(b.time, a.time) << what;
+        EXPECT_EQ(differing(a, b), 0u) << what;
+        EXPECT_TRUE(a.floor == b.floor) << what;
+        EXPECT_EQ(a.builds, b.builds) << what;
+        EXPECT_EQ(a.contacts, b.contacts) << what;
+        EXPECT_GT(a.contacts, 10u) << what;  // spheres in contact with each other and the walls
+        EXPECT_GT(a.builds, 20u) << what;    // many rebuilds...
+        EXPECT_EQ(a.pairs.pairs, 0u) << what;
+        EXPECT_GT(b.pairs.pairs, 20u) << what;  // ...pairs in one sweep...
+        if (margin == 1.0) {
+          EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone and taken again
+        }
+        EXPECT_LT(b.pairs.replays, b.pairs.pairs) << what;
+        std::printf("[info] %s: %llu builds, %llu pairs in one sweep, %llu undone (%llu steps taken again)\n",
+                    what.c_str(), (unsigned long long)a.builds, (unsigned long long)b.pairs.pairs,
+                    (unsigned long long)b.pairs.replays, (unsigned long long)b.pairs.replayed_steps);
+      }
+    }
+  }
+  set_screen_avx2(had_avx2);
+}
+
+// Where two steps cannot share a sweep (a wall that moves, several threads, recording, fewer
+// particles than SimConfig::pair_min), step_pair takes two plain steps: the same state, and
+// no pair counted.
+TEST(StepPair, FallsBackToPlainStepsWhereASweepCannotHoldTwo) {
+  const Law law = laws()[0];
+  auto plain = [&](auto&& edit) {
+    auto s = make_box(law);
+    edit(*s);
+    s->prepare();
+    s->step_once(true);
+    EXPECT_FALSE(s->pairs_allowed());
+    s->step_pair();
+    s->step_pair();
+    s->step_once(false);  // six steps
+    EXPECT_EQ(s->pair_stats().pairs, 0u);
+    return s->particles.x;
+  };
+  auto reference = [&](auto&& edit) {
+    auto s = make_box(law);
+    edit(*s);
+    s->prepare();
+    for (int k = 0; k < 6; ++k) s->step_once(k + 1 < 6);
+    return s->particles.x;
+  };
+  auto moving = [](System& s) { s.walls[0].velocity = {0, 0, 0.01}; };
+  auto recording = [](System& s) { s.cfg.record_contacts = true; };
+  auto few = [](System& s) { s.cfg.pair_min = long(kCount) + 1; };
+  auto threads = [](System& s) {
+    s.cfg.threads = 2;
+    s.cfg.parallel_min = 0;
+  };
+  EXPECT_TRUE(plain(moving) == reference(moving)) << "moving";
+  EXPECT_TRUE(plain(recording) == reference(recording)) << "recording";
+  EXPECT_TRUE(plain(few) == reference(few)) << "few";
+  EXPECT_TRUE(plain(threads) == reference(threads)) << "threads";
+  omp_set_num_threads(1);
+}
+
+// The force loop refuses a second step where it cannot run one: on several threads or with
+// the pairs' results recorded.
+TEST(StepPair, ForceLoopRefusesASecondStepItCannotRun) {
+  auto s = make_box(laws()[0]);
+  const size_t n = s->particles.size();
+  std::vector<PairResult> pair(s->nl.pair_count()), rev(n);
+  std::vector<Vec3> fw(s->nl.wall_entry_count()), tw(fw.size()), cw(fw.size());
+  Drift d1, d2;
+  ForceContext c{s->particles, s->nl, s->walls, s->cfg.dt, s->time, pair, rev, fw, tw, cw, s->cfg.gravity};
+  c.kick_h = 0.5 * s->cfg.dt;
+  c.open_dt = s->cfg.dt;
+  c.drift = &d1;
+  c.drift2 = &d2;
+  c.keep_pair = true;  // recording
+  EXPECT_THROW(s->model->compute(c), std::logic_error);
+  c.keep_pair = false;
+  c.open_dt = 0;  // no fused opening
+  EXPECT_THROW(s->model->compute(c), std::logic_error);
+}
