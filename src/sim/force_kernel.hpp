@@ -369,6 +369,20 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
     };
     const long a = block(tid), b = block(tid + 1);
+    // Finishes the local particles [next, i) and returns i: four at a time in AVX2 registers
+    // where they can (free, no wall entries, the fused opening: finish.hpp), else one at a
+    // time (at most four, then the registers again).
+    auto finish_local = [&](long next, const long i, Drift& d) __attribute__((always_inline)) {
+      if (vec_finish) {
+        while (next < i) {
+          next = finish_free_avx2(ff, next, i, d);
+          for (const long stop = std::min(i, next + 4); next < stop; ++next)
+            finish.template operator()<true>(next, a, b, d);
+        }
+      }
+      for (; next < i; ++next) finish.template operator()<true>(next, a, b, d);
+      return next;
+    };
     // The block's head: the rows whose particles can depend on an earlier block, those within
     // PairSlots::span of its start (i - dep_lo[i] <= span for every i); without a PairSlots,
     // any.
@@ -400,17 +414,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           else
             defer(next);
         }
-        // Local particles: four at a time in AVX2 registers where they can (free, no wall
-        // entries, the fused opening: finish.hpp), else one at a time (at most four, then
-        // the registers again).
-        if (vec_finish) {
-          while (next < i) {
-            next = finish_free_avx2(ff, next, i, drift);
-            for (const long stop = std::min(i, next + 4); next < stop; ++next)
-              finish.template operator()<true>(next, a, b, drift);
-          }
-        }
-        for (; next < i; ++next) finish.template operator()<true>(next, a, b, drift);
+        next = finish_local(next, i, drift);
         swept_to(next);  // every particle before `next` is finished or deferred
       }
     };
@@ -472,16 +476,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         batch.template operator()<true>(C.i, i1, C.k, ke, a, b);
         C.i = i1;
         C.k = ke;
-        long next = C.next;
-        if (vec_finish) {
-          while (next < i1) {
-            next = finish_free_avx2(ff, next, i1, d);
-            for (const long stop = std::min(i1, next + 4); next < stop; ++next)
-              finish.template operator()<true>(next, a, b, d);
-          }
-        }
-        for (; next < i1; ++next) finish.template operator()<true>(next, a, b, d);
-        C.next = next;
+        C.next = finish_local(C.next, i1, d);
       };
       // B's next batch and the particle A must have finished past it (its highest row or
       // partner), found once per batch.

@@ -35,6 +35,19 @@ inline ParamSet params(std::initializer_list<std::pair<const char*, double>> kv)
   return p;
 }
 
+/// `count` spheres of radii uniform in [rmin, rmax] placed at random in the box [lo, hi].
+inline InsertSpec box_fill(const Vec3& lo, const Vec3& hi, double rmin, double rmax, size_t count) {
+  InsertSpec spec;
+  spec.region.kind = Region::Kind::Box;
+  spec.region.lo = lo;
+  spec.region.hi = hi;
+  spec.size.kind = SizeDistribution::Kind::Uniform;
+  spec.size.rmin = rmin;
+  spec.size.rmax = rmax;
+  spec.count = count;
+  return spec;
+}
+
 inline Wall plane(const Vec3& point, const Vec3& normal, int material) {
   Wall w;
   w.name = "plane";

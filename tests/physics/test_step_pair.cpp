@@ -55,15 +55,7 @@ std::unique_ptr<System> make_box(const Law& law) {
   s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, 0));
   s->walls.push_back(plane({0, 0, 0}, {0, 1, 0}, 0));
   s->walls.push_back(plane({0, L, 0}, {0, -1, 0}, 0));
-  InsertSpec spec;
-  spec.region.kind = Region::Kind::Box;
-  spec.region.lo = {0, 0, 0};
-  spec.region.hi = {L, L, H};
-  spec.size.kind = SizeDistribution::Kind::Uniform;
-  spec.size.rmin = 1.5e-3;
-  spec.size.rmax = 2.0e-3;
-  spec.count = kCount;
-  EXPECT_EQ(s->insert(spec), kCount);
+  EXPECT_EQ(s->insert(box_fill({0, 0, 0}, {L, L, H}, 1.5e-3, 2.0e-3, kCount)), kCount);
   Rng rng(7);
   for (auto& v : s->particles.v) v = {rng.normal(), rng.normal(), rng.normal()};
   for (size_t i = 0; i < 5; ++i) {  // frozen in place: they only mark the displacements' box
