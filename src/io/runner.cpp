@@ -373,13 +373,18 @@ int run_case(Case c, const RunOptions& opt) {
   auto last = t0, last_ck = t0;
   uint64_t particle_steps = 0;
   const uint64_t first_step = s.step + 1;
+  // Whether a series row or a frame is written after step k (the last step writes both).
+  auto series_at = [&](const uint64_t k) { return k % series_every == 0 || k == nsteps; };
+  auto frame_at = [&](const uint64_t k) {
+    return (frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0));
+  };
   for (uint64_t k = first_step; k <= nsteps; ++k) {
     // What reads the state after this step is decided before it (the clock is read here,
     // once per step): a step after which nothing is written lets the force loop apply the
     // next step's opening half-kick and drift (System::step_once(true), bit-identical).
     const auto now = clock::now();
-    const bool series_due = k % series_every == 0 || k == nsteps;
-    const bool frame_due = (frame_every && k % frame_every == 0) || (k == nsteps && (!frame_every || k % frame_every != 0));
+    const bool series_due = series_at(k);
+    const bool frame_due = frame_at(k);
     // Checkpoints at the end of a step (a restart continues bit for bit from any step).
     const bool ck_due = c.output.checkpoint_interval > 0 &&
                         std::chrono::duration<double>(now - last_ck).count() >= c.output.checkpoint_interval;
@@ -391,8 +396,7 @@ int run_case(Case c, const RunOptions& opt) {
     // Two steps at once (System::step_pair: the same results) when nothing is written after
     // this one or the next; the clock's events (checkpoint, progress, wall-time limit) are
     // then looked at one step later.
-    if (open_k && s.mid_step() && k + 1 < nsteps && (k + 1) % series_every != 0 &&
-        !(frame_every && (k + 1) % frame_every == 0) && s.pairs_allowed()) {
+    if (open_k && s.mid_step() && k + 1 < nsteps && !series_at(k + 1) && !frame_at(k + 1) && s.pairs_allowed()) {
       s.step_pair();
       particle_steps += 2 * s.particles.size();
       ++k;

@@ -369,6 +369,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);
     };
     const long a = block(tid), b = block(tid + 1);
+    // The batch that starts at row i, entry k: its end ke (kBatch entries, the block's last
+    // batch shorter) and its last row i1 (the last row with entries in [k, ke), or the first
+    // row after them).
+    auto batch_end = [&](const long i, const uint32_t k, long& i1, uint32_t& ke) __attribute__((always_inline)) {
+      ke = std::min(k + kBatch, start[b]);
+      i1 = i;
+      while (i1 < b && start[i1 + 1] <= ke) ++i1;
+    };
     // Finishes the local particles [next, i) and returns i: four at a time in AVX2 registers
     // where they can (free, no wall entries, the fused opening: finish.hpp), else one at a
     // time (at most four, then the registers again).
@@ -400,9 +408,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       long next = a, i = a;
       const long head = kAllLocal ? a : head_end;  // a local copy: kept in a register
       for (uint32_t k = start[a]; i < b;) {
-        const uint32_t ke = std::min(k + kBatch, start[b]);
-        long i1 = i;  // the last row with entries in [k, ke), or the first row after them
-        while (i1 < b && start[i1 + 1] <= ke) ++i1;
+        long i1;
+        uint32_t ke;
+        batch_end(i, k, i1, ke);
         batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
         i = i1;
         k = ke;
@@ -466,12 +474,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       };
       Cursor A{a, a, start[a]}, B{a, a, start[a]};
       Drift drift_b;
-      // The batch after cursor C: its last row i1 and its end ke, as in `sweep`.
-      auto bounds = [&](const Cursor& C, long& i1, uint32_t& ke) __attribute__((always_inline)) {
-        ke = std::min(C.k + kBatch, start[b]);
-        i1 = C.i;
-        while (i1 < b && start[i1 + 1] <= ke) ++i1;
-      };
       auto advance = [&](Cursor& C, Drift& d, const long i1, const uint32_t ke) __attribute__((always_inline)) {
         batch.template operator()<true>(C.i, i1, C.k, ke, a, b);
         C.i = i1;
@@ -486,7 +488,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       auto run_b = [&]() __attribute__((always_inline)) {
         while (B.i < b) {
           if (b_need < 0) {
-            bounds(B, b_i1, b_ke);
+            batch_end(B.i, B.k, b_i1, b_ke);
             uint32_t top = uint32_t(std::min(b_i1, b - 1));
             for (uint32_t k = B.k; k < b_ke; ++k) top = std::max(top, jdx[k]);
             b_need = long(top);
@@ -499,7 +501,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       while (A.i < b) {
         long i1;
         uint32_t ke;
-        bounds(A, i1, ke);
+        batch_end(A.i, A.k, i1, ke);
         advance(A, drift, i1, ke);
         run_b();
       }

@@ -188,7 +188,7 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick_h, bool open_next) {
+void System::compute_forces(double kick_h, bool open_next, Drift* second) {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
   contacts_recorded_ = record;
@@ -206,6 +206,7 @@ void System::compute_forces(double kick_h, bool open_next) {
     open_drift_ = Drift{};
     ctx.open_dt = cfg.dt;
     ctx.drift = &open_drift_;
+    ctx.drift2 = second;  // step_pair: the next step in the same sweep
   }
   ctx.keep_pair = record;
   ctx.slots = &slots_;
@@ -215,10 +216,7 @@ void System::compute_forces(double kick_h, bool open_next) {
   // them: 48 bytes per list entry saved).
   if (ctx.needs_pair_buffer(long(particles.size()))) grow_to(pair_, np);
   model->compute(ctx);
-  sum_wall_loads();
-}
 
-void System::sum_wall_loads() {
   // Wall totals in a fixed order, whatever the thread count: partial sums over fixed blocks
   // of particles, then the blocks in order. Within a block, its wall entries in list order
   // (a contiguous range: the entries are stored particle by particle), then its particles
@@ -453,24 +451,13 @@ void System::step_pair() {
     return;
   }
   if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.pairs >= kSnapPairs) take_snapshot();
-  // Both steps in one sweep of the force loop (ForceContext::drift2).
-  const double dt = cfg.dt, h = 0.5 * dt;
-  const size_t nw = nl.wall_entry_count();
-  contacts_recorded_ = false;
-  if (rev_.size() < particles.size()) rev_.resize(particles.size());
-  if (f_wall_.size() < nw) { f_wall_.resize(nw); tw_wall_.resize(nw); c_wall_.resize(nw); }
-  ForceContext ctx{particles, nl, walls, dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
-  ctx.parallel_min = cfg.parallel_min;
-  ctx.kick_h = h;
-  Drift first, second;
-  ctx.open_dt = dt;
-  ctx.drift = &first;
-  ctx.drift2 = &second;
-  ctx.keep_pair = false;
-  ctx.slots = &slots_;
-  model->compute(ctx);
+  // Both steps in one sweep of the force loop (ForceContext::drift2); open_drift_ gets the
+  // first step's displacements, `second` the second's.
+  const double dt = cfg.dt;
+  Drift second;
+  compute_forces(0.5 * dt, true, &second);
   ++pair_stats_.pairs;
-  if (nl.rebuild_due(first, walls, cfg.skin)) {
+  if (nl.rebuild_due(open_drift_, walls, cfg.skin)) {
     // The lists needed a rebuild between the two steps: back to the snapshot, and the steps
     // since it again one at a time (the same arithmetic: the same states, the rebuild where
     // plain steps take it).
@@ -493,13 +480,12 @@ void System::step_pair() {
     return;
   }
   ++snap_.pairs;
-  // What plain steps do between and after the two force loops: the walls (which stay where
-  // they are) and the loads on them (from the second step's contacts).
+  // What plain steps do between and after the two force loops, for walls that stay where
+  // they are (their loads are the second step's: the wall entries' results were overwritten).
   control_walls(dt);
   move_wall_geometry(dt);
   time += dt;
   ++step;
-  sum_wall_loads();
   control_walls(dt);
   open_drift_ = second;
   opened_ = true;

@@ -185,9 +185,9 @@ class System {
  private:
   /// Forces at the current state; kick_h > 0: each free particle's velocities also get the
   /// half-kick F h/m, T h/I once its force is complete (ForceContext::kick_h).
-  void compute_forces(double kick_h = 0, bool open_next = false);
-  /// The walls' total force and torque from the last force loop's wall contacts and attached particles.
-  void sum_wall_loads();
+  /// second (with open_next; step_pair): the next step too, in the same sweep, its
+  /// displacements there.
+  void compute_forces(double kick_h = 0, bool open_next = false, Drift* second = nullptr);
   /// step_once in two halves: the walls' motion, the opening half-kick and drift (unless
   /// the force loop did them), the clock, pours and the rebuild decision; then the force
   /// loop with the closing half-kick (and, open_next, the next opening), the thermal model
