@@ -145,6 +145,74 @@ struct PairSlots {
   };
   std::unique_ptr<HandOff[]> hand;
   size_t hand_n = 0;
+  /// Two steps in one sweep on several threads (ForceContext::drift2): thread t first
+  /// sweeps its block's tail, the last `span` rows [tail(t), bound[t + 1]), which alone hold
+  /// pairs of block t + 1's particles, then the rest; each thread finishes the particles of
+  /// its own block that depend on the block before (its head). The threads tell each other
+  /// how far they are through a stage record each (one cache line: spun on), which holds
+  /// the call's number times 4 plus the last stage reached: kTailA (the tail swept for the
+  /// first step), kHeadA (the head finished for the first step). The numbers only grow, so
+  /// no reset between calls. The second step's head is handed to the thread before as in a
+  /// chained call (HandOff).
+  static constexpr uint64_t kTailA = 1, kHeadA = 2;
+  struct alignas(64) Stage {
+    std::atomic<uint64_t> v{0};
+  };
+  std::unique_ptr<Stage[]> stage;
+  size_t stage_n = 0;
+  uint64_t pair_calls = 0;  ///< force calls made with two steps on several threads
+  /// Per thread, in a two-step call: room for the particles its pieces leave for later,
+  /// three lists of at most `span` each (the first step's head and tail, the second
+  /// step's tail; force_kernel.hpp), kept from call to call.
+  std::vector<DeferList> pieces;
+  /// Numbers a two-step call on nt threads and makes room for it (set-up, before the
+  /// parallel region; out of line).
+  [[gnu::noinline]] uint64_t next_pair_call(long nt) {
+    if (stage_n < size_t(nt)) {
+      stage = std::make_unique<Stage[]>(size_t(nt));
+      stage_n = size_t(nt);
+    }
+    if (pieces.size() < size_t(nt)) pieces.resize(size_t(nt));
+    for (long t = 0; t < nt; ++t)
+      if (pieces[size_t(t)].size() < size_t(3 * span)) pieces[size_t(t)].resize(size_t(3 * span));
+    return ++pair_calls;
+  }
+  /// Thread t has reached stage s of call `call` (release).
+  [[gnu::noinline]] void reach(long t, uint64_t call, uint64_t s) {
+    std::atomic<uint64_t>& v = stage[size_t(t)].v;
+    v.store(call * 4 + s, std::memory_order_release);
+    v.notify_all();
+  }
+  /// Whether thread t has reached stage s of call `call` (acquire).
+  bool reached(long t, uint64_t call, uint64_t s) const {
+    return stage[size_t(t)].v.load(std::memory_order_acquire) >= call * 4 + s;
+  }
+  /// Waits until thread t has reached stage s of call `call` (acquire): spun on, then slept
+  /// on (as wait_for). Returns the seconds waited (not the block's work: measured()).
+  [[gnu::noinline]] double wait_stage(long t, uint64_t call, uint64_t s) const {
+    const std::atomic<uint64_t>& v = stage[size_t(t)].v;
+    const uint64_t want = call * 4 + s;
+    if (v.load(std::memory_order_acquire) >= want) return 0.0;
+    const double t0 = omp_get_wtime();
+    for (uint32_t spins = 0;; ++spins) {
+      const uint64_t seen = v.load(std::memory_order_acquire);
+      if (seen >= want) break;
+      if (spins < kSpinsBeforeSleep) {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      } else {
+        v.wait(seen, std::memory_order_acquire);
+      }
+    }
+    return omp_get_wtime() - t0;
+  }
+  /// The first row of block t's tail in a two-step call: `span` rows before its end; the
+  /// last block has none (nothing after it depends on it).
+  long tail(long t) const {
+    const long e = bound[size_t(t + 1)];
+    return t + 1 == threads ? e : std::max(bound[size_t(t)], e - span);
+  }
   uint32_t epoch = 0;  ///< force calls made through this PairSlots, the last one's number (wraps)
   uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
   /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
@@ -302,25 +370,35 @@ struct PairSlots {
   /// whole map is cleared first.
   /// Out of line: a set-up call of the force loop (tests/cli/kernel_inlined.sh allows calls
   /// into PairSlots), not inlined into it.
-  [[gnu::noinline]] void update(const NeighborList& nl, long n_, long nt) {
+  /// tails (a two-step call, ForceContext::drift2): the map is for the blocks cut again at
+  /// their tails (tail()), the pieces the threads sweep as units there; a pair not local to
+  /// its block is not local to its piece either, so that map serves plain calls too, but it
+  /// has more slots.
+  [[gnu::noinline]] void update(const NeighborList& nl, long n_, long nt, bool tails = false) {
     plan(nl, n_, nt);
-    if (mapped) return;
+    if (mapped && mapped_tails == tails) return;
     mapped = true;
+    mapped_tails = tails;
     if (map_all) {
       reserve_headroom(of, np);
       of.assign(np, kNone);
       map_all = false;
     }
+    // The pieces' bounds, ascending: the blocks', and with tails each block's tail.
+    cut.assign(1, 0);
+    for (long t = 0; t < nt; ++t) {
+      if (tails && tail(t) > cut.back()) cut.push_back(tail(t));
+      if (bound[size_t(t + 1)] > cut.back()) cut.push_back(bound[size_t(t + 1)]);
+    }
     count = 0;
     long from = 0;  // rows before it are mapped (or need no slot)
-    for (long t = 1; t < nt; ++t) {
-      const long p = bound[size_t(t)];
+    for (size_t u = 1; u + 1 < cut.size(); ++u) {
+      const long p = cut[u];
       const long lo = std::max(from, p - span), hi = std::min(n, p + span);
+      size_t piece = 0;  // the piece of row i
       for (long i = lo; i < hi; ++i) {
-        // the block of row i
-        long u = 0;
-        while (bound[size_t(u + 1)] <= i) ++u;
-        const long a = bound[size_t(u)], b = bound[size_t(u + 1)];
+        while (cut[piece + 1] <= i) ++piece;
+        const long a = cut[piece], b = cut[piece + 1];
         for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
           of[k] = local_to_block(nl.dep_lo.data(), nl.jdx[k], a, b) ? kNone : count++;
       }
@@ -330,6 +408,8 @@ struct PairSlots {
 
  private:
   bool map_all = true;  ///< the next update() clears the whole map (a new list)
+  bool mapped_tails = false;  ///< the map is for the blocks cut at their tails (update())
+  std::vector<long> cut;      ///< the pieces' bounds of the last map (update())
 };
 
 struct ForceContext {
@@ -367,7 +447,8 @@ struct ForceContext {
   /// particles whose radii are as at the list build (no thermal model: System::step_once).
   double open_dt = 0;
   Drift* drift = nullptr;
-  /// When not null (needs the fused opening, one thread and no recording): the loop runs
+  /// When not null (needs the fused opening and no recording; on several threads a PairSlots
+  /// whose blocks are chained): the loop runs
   /// the next step too, in the same sweep (System::step_pair), its displacements since the
   /// build into *drift2. Its forces, kicks and drift are those of the next call to the loop
   /// with the same lists: the caller must take that step only if the lists need no rebuild

@@ -29,8 +29,9 @@
 // (always, on one thread); pairs of particles near a block boundary store their results,
 // gathered through the transposed index in the same order. Only WHEN and on which thread
 // pass 2 runs, and how the reverse sums are collected, depend on the thread count, never
-// what is summed or in which order. With ForceContext::drift2 (one thread), the next step
-// runs in the same sweep, a second cursor following the first (System::step_pair).
+// what is summed or in which order. With ForceContext::drift2, the next step runs in the
+// same sweep, a second cursor following the first in each thread's block (System::step_pair;
+// on several threads each block is swept as two pieces, its tail first: two_steps below).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -121,8 +122,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   if (open_dt > 0 && (kick_h <= 0 || c.drift == nullptr || !nl.has_reference(size_t(n)) || nl.tracks_radii()))
     throw std::logic_error(
         "force loop: the fused opening needs the closing half-kick, a drift and a built list without radius growth");
-  if (c.drift2 != nullptr && (open_dt <= 0 || keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1)))
-    throw std::logic_error("force loop: two steps in one sweep need the fused opening, one thread and no recording");
+  if (c.drift2 != nullptr && (open_dt <= 0 || keep_pair || (n > c.parallel_min && omp_get_max_threads() > 1 && c.slots == nullptr)))
+    throw std::logic_error(
+        "force loop: two steps in one sweep need the fused opening, no recording and, on several threads, a PairSlots");
   if (c.needs_pair_buffer(n) && c.pair.size() < nl.pair_count())
     throw std::logic_error("force loop: the per-pair result buffer is shorter than the neighbor list");
 
@@ -144,23 +146,28 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // shared out (below), and without recording the gathered pairs are stored compactly. The
   // slots are set up before the parallel region, for the team it will have (no barrier for
   // that inside); a team of another size sets them up again, inside.
+  const bool two = c.drift2 != nullptr;
   auto setup_slots = [&](const long nt) __attribute__((always_inline)) {
     if (keep_pair) {
       c.slots->plan(nl, n, nt);  // the blocks only: every result is stored by list entry
     } else {
-      c.slots->update(nl, n, nt);
+      c.slots->update(nl, n, nt, two);
       c.slots->fit(c.pair);
       res = c.pair.data();
       slot_of = c.slots->of.data();
     }
     if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
+    if (two && !c.slots->chained)
+      throw std::logic_error("force loop: two steps in one sweep on several threads need blocks of 2 spans (chained)");
   };
   const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
   // The call's number for the chained finishing's hand-offs (PairSlots::HandOff).
   uint32_t epoch = 0;
+  uint64_t pcall = 0;  // and for the stages of a two-step call (PairSlots::Stage)
   if (nt_plan > 1 && c.slots != nullptr) {
     setup_slots(nt_plan);
     epoch = c.slots->next_epoch(nt_plan);
+    if (two) pcall = c.slots->next_pair_call(nt_plan);
   }
   // The arrays' pointers and the loop's constants are firstprivate, and the lambdas below are
   // defined inside the region: shared, each use went through the region's record of the
@@ -181,6 +188,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       {
         setup_slots(nt);
         epoch = c.slots->next_epoch(nt);
+        if (two) pcall = c.slots->next_pair_call(nt);
       }  // implicit barrier: every thread sees the blocks, res, slot_of, the lists and epoch
     }
     auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
@@ -372,10 +380,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // The batch that starts at row i, entry k: its end ke (kBatch entries, the block's last
     // batch shorter) and its last row i1 (the last row with entries in [k, ke), or the first
     // row after them).
-    auto batch_end = [&](const long i, const uint32_t k, long& i1, uint32_t& ke) __attribute__((always_inline)) {
-      ke = std::min(k + kBatch, start[b]);
+    // e: where the rows end (the block's end, or a piece's in a two-step call).
+    auto batch_end = [&](const long i, const uint32_t k, long& i1, uint32_t& ke, const long e = -1)
+                         __attribute__((always_inline)) {
+      const long end = e < 0 ? b : e;
+      ke = std::min(k + kBatch, start[end]);
       i1 = i;
-      while (i1 < b && start[i1 + 1] <= ke) ++i1;
+      while (i1 < end && start[i1 + 1] <= ke) ++i1;
     };
     // Finishes the local particles [next, i) and returns i: four at a time in AVX2 registers
     // where they can (free, no wall entries, the fused opening: finish.hpp), else one at a
@@ -454,59 +465,140 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // rows are done, and it hands the list to thread t - 1 (release), which finishes them
     // after its own sweep (acquire): they need rows of blocks t - 1 and t only, up to their
     // own. Otherwise all threads meet at the barrier and share the deferred particles out.
-    const bool chain = share && c.slots->chained;
+    const bool chain = share && c.slots->chained;  // always, in a two-step call (setup_slots)
     long hand_at = chain && tid > 0 ? head_end : std::numeric_limits<long>::max();
     auto hand_over = [&]() __attribute__((always_inline)) {
       own.resize(own_n);  // complete: no particle is deferred after this point
       c.slots->hand_over(tid, own, epoch);
       hand_at = std::numeric_limits<long>::max();
     };
-    if (c.drift2 != nullptr) {
-      // Two steps in one sweep (one thread): cursor A runs this step as `sweep` does, cursor
-      // B the next one, a batch at a time, once A has finished the batch's rows and every
-      // partner they hold (so B reads positions and velocities A has moved, and scatters
-      // into reverse sums A has read and zeroed). Each particle's arithmetic, and its order,
-      // is that of two separate calls; B works on data A touched one plane of cells before,
-      // still in cache at sizes where a whole sweep is not.
+    double waited = 0;  // seconds a two-step call waited for another thread (not work)
+    Drift drift_b;      // a two-step call: this thread's share of the second step's displacements
+    // Two steps in one sweep (ForceContext::drift2). Cursor A runs this step as `sweep`
+    // does, cursor B the next one, a batch at a time, once A has finished the batch's rows
+    // and every partner they hold (so B reads positions and velocities A has moved, and
+    // scatters into reverse sums and pair slots that A has read). Each particle's arithmetic,
+    // and its order, is that of two separate calls; B works on data A touched one plane of
+    // cells before, still in cache at sizes where a whole sweep is not.
+    // On several threads each block is swept as two pieces, its tail (PairSlots::tail: the
+    // last `span` rows, the only ones that hold pairs of the next block's particles) and
+    // the rest, each piece with its own locality (a particle is local to the piece that
+    // holds all its rows). A sweeps the tail first, so that the next block's head (its
+    // particles that depend on this block) can be finished for the first step by its own
+    // thread early on (PairSlots::Stage), and B can follow A there. B sweeps the tail last,
+    // once A is done and the next block's head is finished for the first step; then this
+    // thread finishes the next block's head for the second step, handed over as in a
+    // chained call (PairSlots::HandOff; below). One thread: one piece, no locality tests,
+    // no stages.
+    auto two_steps = [&]<bool kAllLocal>() __attribute__((always_inline)) {
       struct Cursor {
-        long next, i;  // the first particle not finished, the first row not done
+        long next, i;  // the first particle not finished (or deferred), the first row not done
         uint32_t k;    // the first entry not screened
       };
-      Cursor A{a, a, start[a]}, B{a, a, start[a]};
-      Drift drift_b;
-      auto advance = [&](Cursor& C, Drift& d, const long i1, const uint32_t ke) __attribute__((always_inline)) {
-        batch.template operator()<true>(C.i, i1, C.k, ke, a, b);
+      const long tb = kAllLocal ? b : c.slots->tail(tid);  // the tail: rows [tb, b)
+      const long hd = kAllLocal || tid == 0 ? a : head_end;  // the head: particles [a, hd)
+      // The particles the first step left for later: the head's that depend on the block
+      // before, the tail's that depend on the rest of the block; and the second step's tail.
+      // (The second step's head goes to `own`, the list handed to the thread before.)
+      // Both at most `span` long (PairSlots::pieces).
+      uint32_t* const head_a = kAllLocal ? nullptr : c.slots->pieces[size_t(tid)].data();
+      uint32_t* const tail_a = kAllLocal ? nullptr : head_a + c.slots->span;
+      uint32_t* const tail_b = kAllLocal ? nullptr : tail_a + c.slots->span;
+      size_t nha = 0, nta = 0, ntb = 0;
+      // One batch of the piece [pa, pe) at cursor C, then the particles it completed:
+      // finished, or (those before `head` that depend on rows before pa) deferred.
+      auto advance = [&](Cursor& C, Drift& d, const long i1, const uint32_t ke, const long pa, const long pe,
+                         const long head, uint32_t* dl, size_t& dn) __attribute__((always_inline)) {
+        batch.template operator()<kAllLocal>(C.i, i1, C.k, ke, pa, pe);
         C.i = i1;
         C.k = ke;
+        if constexpr (!kAllLocal) {
+          for (const long h = std::min(i1, head); C.next < h; ++C.next) {
+            if (long(dep_lo[C.next]) >= pa)
+              finish.template operator()<true>(C.next, pa, pe, d);
+            else
+              dl[dn++] = uint32_t(C.next);
+          }
+        }
         C.next = finish_local(C.next, i1, d);
       };
+      // The piece [pa, pe) swept whole by one cursor.
+      auto whole = [&](const long pa, const long pe, Drift& d, uint32_t* dl, size_t& dn)
+                       __attribute__((always_inline)) {
+        Cursor C{pa, pa, start[pa]};
+        while (C.i < pe) {
+          long i1;
+          uint32_t ke;
+          batch_end(C.i, C.k, i1, ke, pe);
+          advance(C, d, i1, ke, pa, pe, pe, dl, dn);
+        }
+      };
+      // First step, the tail.
+      if (tb < b) whole(tb, b, drift, tail_a, nta);
+      if constexpr (!kAllLocal) c.slots->reach(tid, pcall, PairSlots::kTailA);
+      Cursor A{a, a, start[a]}, B{a, a, start[a]};
+      bool head_done = hd == a, a_done = false;
+      // First step, the head: once A has passed it and the block before has swept its
+      // tail (looked at after every batch; waited for only when A has nothing else to do).
+      auto head_check = [&](const bool wait) __attribute__((always_inline)) {
+        if (head_done || A.next < hd) return;
+        if (!wait && !c.slots->reached(tid - 1, pcall, PairSlots::kTailA)) return;
+        waited += c.slots->wait_stage(tid - 1, pcall, PairSlots::kTailA);
+        for (size_t g = 0; g < nha; ++g) finish.template operator()<false>(long(head_a[g]), a, tb, drift);
+        head_done = true;
+        c.slots->reach(tid, pcall, PairSlots::kHeadA);
+      };
       // B's next batch and the particle A must have finished past it (its highest row or
-      // partner), found once per batch.
+      // partner), found once per batch. Rows and partners in the tail wait for all of A.
       long b_i1 = 0;
       uint32_t b_ke = 0;
       long b_need = -1;
       auto run_b = [&]() __attribute__((always_inline)) {
-        while (B.i < b) {
+        if (!head_done) return;
+        while (B.i < tb) {
           if (b_need < 0) {
-            batch_end(B.i, B.k, b_i1, b_ke);
-            uint32_t top = uint32_t(std::min(b_i1, b - 1));
+            batch_end(B.i, B.k, b_i1, b_ke, tb);
+            uint32_t top = uint32_t(std::min(b_i1, tb - 1));
             for (uint32_t k = B.k; k < b_ke; ++k) top = std::max(top, jdx[k]);
             b_need = long(top);
           }
-          if (b_need >= A.next) return;
-          advance(B, drift_b, b_i1, b_ke);
+          if (b_need >= tb ? !a_done : b_need >= A.next) return;
+          advance(B, drift_b, b_i1, b_ke, a, tb, hd, own_p, own_n);
           b_need = -1;
+          if constexpr (!kAllLocal) {
+            if (B.next >= hand_at) hand_over();  // the second step's head, to the thread before
+          }
         }
       };
-      while (A.i < b) {
+      while (A.i < tb) {
         long i1;
         uint32_t ke;
-        batch_end(A.i, A.k, i1, ke);
-        advance(A, drift, i1, ke);
+        batch_end(A.i, A.k, i1, ke, tb);
+        advance(A, drift, i1, ke, a, tb, hd, head_a, nha);
+        if constexpr (!kAllLocal) head_check(false);
         run_b();
       }
+      if constexpr (!kAllLocal) {
+        head_check(true);
+        for (size_t g = 0; g < nta; ++g) finish.template operator()<false>(long(tail_a[g]), tb, b, drift);
+      }
+      a_done = true;
       run_b();
-      c.drift2->merge(drift_b);
+      // Second step, the tail (its partners in the next block's head finished for the first
+      // step); the next block's head follows after the sweep (the chained hand-off).
+      if constexpr (!kAllLocal) {
+        if (tb < b) {
+          waited += c.slots->wait_stage(tid + 1, pcall, PairSlots::kHeadA);
+          whole(tb, b, drift_b, tail_b, ntb);
+          for (size_t g = 0; g < ntb; ++g) finish.template operator()<false>(long(tail_b[g]), tb, b, drift_b);
+        }
+      }
+    };
+    if (two) {
+      if (nt == 1)
+        two_steps.template operator()<true>();
+      else
+        two_steps.template operator()<false>();
     } else if (nt == 1)
       sweep.template operator()<true>(none, none);
     else
@@ -519,12 +611,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (share) {
       if (hand_at != std::numeric_limits<long>::max()) hand_over();  // an empty block
       own.swap(c.slots->deferred[size_t(tid)]);  // a buffer handed over stays where it is
-      double busy = omp_get_wtime() - t_sweep;
+      double busy = omp_get_wtime() - t_sweep - waited;
       if (chain && tid + 1 < nt) {
         const PairSlots::HandOff& H = c.slots->wait_for(tid + 1, epoch);
         const double t0 = omp_get_wtime();
         const long ta = block(tid + 1), tb = block(tid + 2);
-        for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, drift);
+        Drift& d = two ? drift_b : drift;  // a two-step call hands over the second step's head
+        for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, d);
         busy += omp_get_wtime() - t0;  // the waiting is not this block's work
       }
       c.slots->measured(tid, busy);
@@ -555,6 +648,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (open_dt > 0) {
 #pragma omp critical(cohdem_fused_drift)
       c.drift->merge(drift);  // max / min / or: the same in any order
+      if (two) c.drift2->merge(drift_b);
     }
   }
   if (timed) c.slots->rebalance();

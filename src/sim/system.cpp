@@ -372,10 +372,12 @@ void System::end_step(bool open_next) {
 }
 
 bool System::pairs_allowed() const {
-  if (cfg.pair_min < 0 || long(particles.size()) < cfg.pair_min || !opened_ || dirty_ || thermal || !pours.empty() ||
+  // pair_min particles per thread: on the development VM, two threads gained about 4 %
+  // at 10^6 particles and lost about 11 % at 10^5 (docs/performance.md, thirty-fifth round).
+  const long n = long(particles.size()), nt = n > cfg.parallel_min ? long(omp_get_max_threads()) : 1;
+  if (cfg.pair_min < 0 || n < cfg.pair_min * nt || !opened_ || dirty_ || thermal || !pours.empty() ||
       cfg.record_contacts || !nl.attached.empty() || !nl.has_reference(particles.size()) || nl.tracks_radii())
     return false;
-  if (long(particles.size()) > cfg.parallel_min && omp_get_max_threads() > 1) return false;
   static const bool off = [] {
     const char* e = std::getenv("COHDEM_PAIR");
     return e != nullptr && std::string(e) == "0";
@@ -396,11 +398,26 @@ void System::SparseHistory::take(const HistoryArray& h) {
   rec.clear();
   const size_t st = h.stride, n = h.live.size();
   const std::byte* const d = h.data.data();
+  // Whether record r holds a non-zero byte: eight at a time where the records are whole
+  // words (all the laws' are; byte by byte this scan took most of a snapshot's time).
+  const bool words = st % 8 == 0;
+  auto nonzero = [&](const std::byte* r) {
+    if (words) {
+      uint64_t acc = 0;
+      for (size_t b = 0; b < st; b += 8) {
+        uint64_t w;
+        std::memcpy(&w, r + b, 8);
+        acc |= w;
+      }
+      return acc != 0;
+    }
+    for (size_t b = 0; b < st; ++b)
+      if (r[b] != std::byte{0}) return true;
+    return false;
+  };
   for (size_t e = 0; e < n; ++e) {
     const std::byte* const r = d + e * st;
-    bool keep = h.live[e] != 0;
-    for (size_t b = 0; b < st && !keep; ++b) keep = r[b] != std::byte{0};
-    if (!keep) continue;
+    if (h.live[e] == 0 && !nonzero(r)) continue;
     k.push_back(uint32_t(e));
     live.push_back(h.live[e]);
     rec.insert(rec.end(), r, r + st);
@@ -441,14 +458,28 @@ void System::step_pair() {
   // Near a rebuild (the displacements since the build past SimConfig::pair_margin of what
   // triggers one): plain steps. A snapshot is taken after every list build
   // and every kSnapPairs pairs since (its cost: a copy of the positions, velocities and
-  // spins and of the history's live records, and a read of the rest, about a twentieth of
-  // a step at that spacing).
-  constexpr uint64_t kSnapPairs = 32;
+  // spins and of the history's live records, and a read of the rest: 10-18 ms at 10^6
+  // particles, about one step; the first, whose pages are new, 180 ms). Every 32 pairs it
+  // took 5 % of a two-thread run at 10^6; every 128, a pair undone takes at most 256 steps
+  // again (none was undone in 1000 steps of the 10^6 gas: the margin keeps it rare).
+  constexpr uint64_t kSnapPairs = 128;
   if (nl.stats.builds == builds && nl.rebuild_due(open_drift_, walls, cfg.pair_margin * cfg.skin)) {
     snap_.valid = false;
     end_step(true);
     step_once(true);
     return;
+  }
+  // On several threads the blocks must each hold two spans of rows (PairSlots::chained:
+  // a block's tail and head apart; the force loop's set-up makes the same split).
+  const long n = long(particles.size()), nt = omp_get_max_threads();
+  if (n > cfg.parallel_min && nt > 1) {
+    slots_.plan(nl, n, nt);
+    if (!slots_.chained) {
+      snap_.valid = false;
+      end_step(true);
+      step_once(true);
+      return;
+    }
   }
   if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.pairs >= kSnapPairs) take_snapshot();
   // Both steps in one sweep of the force loop (ForceContext::drift2); open_drift_ gets the

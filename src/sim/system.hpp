@@ -48,9 +48,10 @@ struct SimConfig {
   /// stresses are measured; always on with a thermal model). Off, the one-thread force loop
   /// writes no per-pair results at all (less memory traffic).
   bool record_contacts = false;
-  /// From this many particles up, System::step_pair evaluates two steps in one sweep of the
-  /// force loop where it may (one thread, walls at rest, no pours, thermal model or
-  /// recording); below, and when negative, it takes them one at a time. The environment
+  /// From this many particles per thread up, System::step_pair evaluates two steps in one
+  /// sweep of the force loop where it may (walls at rest, no pours, thermal model or
+  /// recording; on several threads, blocks of at least two planes' rows,
+  /// PairSlots::chained); below, and when negative, it takes them one at a time. The environment
   /// variable COHDEM_PAIR=0 turns it off (for comparisons). Results are the same bits.
   long pair_min = 65536;
   /// step_pair takes plain steps once the displacements since the lists' build reach this
@@ -116,9 +117,10 @@ class System {
   /// step_pair()), with the same results bit for bit. Where pairs_allowed(), both steps are
   /// evaluated in one sweep of the force loop (ForceContext::drift2): the second step's
   /// particles are read about one plane of cells after the first step wrote them, from
-  /// cache, where a whole sweep is not (about 1.1x on a one-thread 10^6-particle gas). If
+  /// cache, where a whole sweep is not (about 1.1x on a one-thread 10^6-particle gas, 1.04x
+  /// on two threads). If
   /// the lists turn out to need a rebuild between the two steps, the state goes back to the
-  /// last snapshot (taken after each list build and every 32 pairs) and the steps since are
+  /// last snapshot (taken after each list build and every 128 pairs) and the steps since are
   /// taken again one at a time. Near a rebuild it takes plain steps.
   void step_pair();
   /// Whether step_pair can evaluate two steps in one sweep now (SimConfig::pair_min).

@@ -6,7 +6,8 @@
 // as the same run of plain steps (step_once(true)): checked here on a box of colliding
 // spheres with a small skin, so that rebuilds fall between the two steps of a pair again and
 // again (the way back is taken) and also at pair boundaries, with frozen particles, wall
-// contacts and three contact laws, on the AVX2 and the scalar paths.
+// contacts and three contact laws, on the AVX2 and the scalar paths; and on two and three
+// threads, whose blocks are swept in two pieces each.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -46,10 +47,13 @@ std::vector<Law> laws() {
 // a sweep of about ten batches (sim/screen.hpp, kBatch), so that the second step's cursor
 // waits for the first's again and again.
 constexpr size_t kCount = 3000;
-std::unique_ptr<System> make_box(const Law& law) {
+std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = false) {
   auto s =
       make_system({{"glass", 2500, 5e7, 0.25}}, law.model, law.rolling, law.p, 5e-6, {0, 0, -9.81}, 1e-4);
-  const double L = 0.04 * std::sqrt(10.0), H = 0.018;
+  // column: a box of the same volume ten times as tall, for several threads: the lists'
+  // rows run plane by plane up the box, and a block must hold two planes' rows
+  // (PairSlots::chained) for pairs.
+  const double L = column ? 0.04 : 0.04 * std::sqrt(10.0), H = column ? 0.18 : 0.018;
   s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
   s->walls.push_back(plane({0, 0, 0}, {1, 0, 0}, 0));
   s->walls.push_back(plane({L, 0, 0}, {-1, 0, 0}, 0));
@@ -63,6 +67,10 @@ std::unique_ptr<System> make_box(const Law& law) {
     s->particles.v[i] = s->particles.omega[i] = Vec3{};
   }
   s->cfg.pair_min = 0;  // pairs for these few particles too
+  if (threads > 1) {
+    s->cfg.threads = threads;
+    s->cfg.parallel_min = 0;  // the force loop on `threads` threads for these few particles
+  }
   s->prepare();
   return s;
 }
@@ -79,8 +87,8 @@ struct End {
 
 // `steps` steps (pairs near a rebuild only below `margin`, SimConfig::pair_margin): plain (step_once(true),
 // the last one closed), or in pairs where it can.
-End run(const Law& law, bool pairs, int steps, double margin) {
-  auto s = make_box(law);
+End run(const Law& law, bool pairs, int steps, double margin, int threads = 1, bool column = false) {
+  auto s = make_box(law, threads, column);
   s->cfg.pair_margin = margin;
   int k = 0;
   s->step_once(true);
@@ -154,9 +162,45 @@ TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
   set_screen_avx2(had_avx2);
 }
 
-// Where two steps cannot share a sweep (a wall that moves, several threads, recording, fewer
-// particles than SimConfig::pair_min), step_pair takes two plain steps: the same state, and
-// no pair counted.
+// On several threads each block is swept in two pieces (its tail first for the first step,
+// last for the second) and the threads wait for each other's stages (PairSlots::Stage); the
+// results must still be those of plain steps on one thread, bit for bit: on two threads, and
+// on three (the middle block has both a head and a tail; more threads than this machine may
+// have cores, so the waits sleep as well as spin).
+TEST(StepPair, PairsOnSeveralThreadsEndInTheStateOfPlainStepsOnOne) {
+  constexpr int kSteps = 201;
+  const bool had_avx2 = screen_avx2_enabled();
+  for (bool simd : {true, false}) {
+    if (simd && !avx2_available()) continue;
+    set_screen_avx2(simd);
+    for (const Law& law : laws()) {
+      omp_set_num_threads(1);
+      const End a = run(law, false, kSteps, 1.0, 1, true);
+      for (int threads : {2, 3}) {
+        const End b = run(law, true, kSteps, 1.0, threads, true);
+        omp_set_num_threads(1);
+        const std::string what = std::string(law.model) + (simd ? " (AVX2)" : " (scalar)") + ", " +
+                                 std::to_string(threads) + " threads";
+        EXPECT_EQ(b.step, a.step) << what;
+        EXPECT_EQ(b.time, a.time) << what;
+        EXPECT_EQ(differing(a, b), 0u) << what;
+        EXPECT_TRUE(a.floor == b.floor) << what;
+        EXPECT_EQ(a.builds, b.builds) << what;
+        EXPECT_EQ(a.contacts, b.contacts) << what;
+        EXPECT_GT(b.pairs.pairs, 10u) << what;  // pairs in one sweep on several threads...
+        EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone (margin 1)
+        std::printf("[info] %s: %llu pairs in one sweep, %llu undone\n", what.c_str(),
+                    (unsigned long long)b.pairs.pairs, (unsigned long long)b.pairs.replays);
+      }
+    }
+  }
+  set_screen_avx2(had_avx2);
+}
+
+// Where two steps cannot share a sweep (a wall that moves, recording, fewer particles than
+// SimConfig::pair_min, or than pair_min per thread; several threads whose blocks are shorter
+// than two planes of rows),
+// step_pair takes two plain steps: the same state, and no pair counted.
 TEST(StepPair, FallsBackToPlainStepsWhereASweepCannotHoldTwo) {
   const Law law = laws()[0];
   auto plain = [&](auto&& edit) {
@@ -164,7 +208,8 @@ TEST(StepPair, FallsBackToPlainStepsWhereASweepCannotHoldTwo) {
     edit(*s);
     s->prepare();
     s->step_once(true);
-    EXPECT_FALSE(s->pairs_allowed());
+    // short blocks: known in step_pair only
+    EXPECT_TRUE(s->pairs_allowed() == (s->cfg.threads > 1 && s->cfg.pair_min == 0));
     s->step_pair();
     s->step_pair();
     s->step_once(false);  // six steps
@@ -181,19 +226,25 @@ TEST(StepPair, FallsBackToPlainStepsWhereASweepCannotHoldTwo) {
   auto moving = [](System& s) { s.walls[0].velocity = {0, 0, 0.01}; };
   auto recording = [](System& s) { s.cfg.record_contacts = true; };
   auto few = [](System& s) { s.cfg.pair_min = long(kCount) + 1; };
-  auto threads = [](System& s) {
+  auto threads = [](System& s) {  // the wide box: blocks of 1500 rows, planes of about 900
     s.cfg.threads = 2;
     s.cfg.parallel_min = 0;
   };
   EXPECT_TRUE(plain(moving) == reference(moving)) << "moving";
   EXPECT_TRUE(plain(recording) == reference(recording)) << "recording";
   EXPECT_TRUE(plain(few) == reference(few)) << "few";
+  auto per_thread = [](System& s) {  // 3000 particles, 2 threads, 2000 a thread needed
+    s.cfg.threads = 2;
+    s.cfg.parallel_min = 0;
+    s.cfg.pair_min = 2000;
+  };
   EXPECT_TRUE(plain(threads) == reference(threads)) << "threads";
+  EXPECT_TRUE(plain(per_thread) == reference(per_thread)) << "per thread";
   omp_set_num_threads(1);
 }
 
-// The force loop refuses a second step where it cannot run one: on several threads or with
-// the pairs' results recorded.
+// The force loop refuses a second step where it cannot run one: with the pairs' results
+// recorded, or without the fused opening.
 TEST(StepPair, ForceLoopRefusesASecondStepItCannotRun) {
   auto s = make_box(laws()[0]);
   const size_t n = s->particles.size();
