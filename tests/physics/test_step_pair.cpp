@@ -124,42 +124,54 @@ size_t differing(const End& a, const End& b) {
   return d;
 }
 
+// Runs check(law, simd, label) for every law, on the AVX2 path (where the CPU has it) and
+// on the scalar one.
+template <class F>
+void each_law_and_path(F&& check) {
+  const bool had_avx2 = screen_avx2_enabled();
+  for (bool simd : {true, false}) {
+    if (simd && !avx2_available()) continue;
+    set_screen_avx2(simd);
+    for (const Law& law : laws()) check(law, std::string(law.model) + (simd ? " (AVX2)" : " (scalar)"));
+  }
+  set_screen_avx2(had_avx2);
+}
+
+// The same end, bit for bit: step, time, every particle's state, the floor's force, the
+// list builds and the contacts.
+void expect_same(const End& a, const End& b, const std::string& what) {
+  EXPECT_EQ(b.step, a.step) << what;
+  EXPECT_EQ(b.time, a.time) << what;
+  EXPECT_EQ(differing(a, b), 0u) << what;
+  EXPECT_TRUE(a.floor == b.floor) << what;
+  EXPECT_EQ(a.builds, b.builds) << what;
+  EXPECT_EQ(a.contacts, b.contacts) << what;
+}
+
 }  // namespace
 
 TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
   omp_set_num_threads(1);
   constexpr int kSteps = 401;
-  const bool had_avx2 = screen_avx2_enabled();
-  for (bool simd : {true, false}) {
-    if (simd && !avx2_available()) continue;
-    set_screen_avx2(simd);
-    for (const Law& law : laws()) {
-      for (double margin : {0.75, 1.0}) {
-        const End a = run(law, false, kSteps, margin), b = run(law, true, kSteps, margin);
-        const std::string what =
-            std::string(law.model) + (simd ? " (AVX2)" : " (scalar)") + ", margin " + std::to_string(margin);
-        EXPECT_EQ(a.step, uint64_t(kSteps)) << what;
-        EXPECT_EQ(b.step, a.step) << what;
-        EXPECT_EQ(b.time, a.time) << what;
-        EXPECT_EQ(differing(a, b), 0u) << what;
-        EXPECT_TRUE(a.floor == b.floor) << what;
-        EXPECT_EQ(a.builds, b.builds) << what;
-        EXPECT_EQ(a.contacts, b.contacts) << what;
-        EXPECT_GT(a.contacts, 10u) << what;  // spheres in contact with each other and the walls
-        EXPECT_GT(a.builds, 20u) << what;    // many rebuilds...
-        EXPECT_EQ(a.pairs.pairs, 0u) << what;
-        EXPECT_GT(b.pairs.pairs, 20u) << what;  // ...pairs in one sweep...
-        if (margin == 1.0) {
-          EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone and taken again
-        }
-        EXPECT_LT(b.pairs.replays, b.pairs.pairs) << what;
-        std::printf("[info] %s: %llu builds, %llu pairs in one sweep, %llu undone (%llu steps taken again)\n",
-                    what.c_str(), (unsigned long long)a.builds, (unsigned long long)b.pairs.pairs,
-                    (unsigned long long)b.pairs.replays, (unsigned long long)b.pairs.replayed_steps);
+  each_law_and_path([&](const Law& law, const std::string& path) {
+    for (double margin : {0.75, 1.0}) {
+      const End a = run(law, false, kSteps, margin), b = run(law, true, kSteps, margin);
+      const std::string what = path + ", margin " + std::to_string(margin);
+      EXPECT_EQ(a.step, uint64_t(kSteps)) << what;
+      expect_same(a, b, what);
+      EXPECT_GT(a.contacts, 10u) << what;  // spheres in contact with each other and the walls
+      EXPECT_GT(a.builds, 20u) << what;    // many rebuilds...
+      EXPECT_EQ(a.pairs.pairs, 0u) << what;
+      EXPECT_GT(b.pairs.pairs, 20u) << what;  // ...pairs in one sweep...
+      if (margin == 1.0) {
+        EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone and taken again
       }
+      EXPECT_LT(b.pairs.replays, b.pairs.pairs) << what;
+      std::printf("[info] %s: %llu builds, %llu pairs in one sweep, %llu undone (%llu steps taken again)\n",
+                  what.c_str(), (unsigned long long)a.builds, (unsigned long long)b.pairs.pairs,
+                  (unsigned long long)b.pairs.replays, (unsigned long long)b.pairs.replayed_steps);
     }
-  }
-  set_screen_avx2(had_avx2);
+  });
 }
 
 // On several threads each block is swept in two pieces (its tail first for the first step,
@@ -169,32 +181,20 @@ TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
 // have cores, so the waits sleep as well as spin).
 TEST(StepPair, PairsOnSeveralThreadsEndInTheStateOfPlainStepsOnOne) {
   constexpr int kSteps = 201;
-  const bool had_avx2 = screen_avx2_enabled();
-  for (bool simd : {true, false}) {
-    if (simd && !avx2_available()) continue;
-    set_screen_avx2(simd);
-    for (const Law& law : laws()) {
+  each_law_and_path([&](const Law& law, const std::string& path) {
+    omp_set_num_threads(1);
+    const End a = run(law, false, kSteps, 1.0, 1, true);
+    for (int threads : {2, 3}) {
+      const End b = run(law, true, kSteps, 1.0, threads, true);
       omp_set_num_threads(1);
-      const End a = run(law, false, kSteps, 1.0, 1, true);
-      for (int threads : {2, 3}) {
-        const End b = run(law, true, kSteps, 1.0, threads, true);
-        omp_set_num_threads(1);
-        const std::string what = std::string(law.model) + (simd ? " (AVX2)" : " (scalar)") + ", " +
-                                 std::to_string(threads) + " threads";
-        EXPECT_EQ(b.step, a.step) << what;
-        EXPECT_EQ(b.time, a.time) << what;
-        EXPECT_EQ(differing(a, b), 0u) << what;
-        EXPECT_TRUE(a.floor == b.floor) << what;
-        EXPECT_EQ(a.builds, b.builds) << what;
-        EXPECT_EQ(a.contacts, b.contacts) << what;
-        EXPECT_GT(b.pairs.pairs, 10u) << what;  // pairs in one sweep on several threads...
-        EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone (margin 1)
-        std::printf("[info] %s: %llu pairs in one sweep, %llu undone\n", what.c_str(),
-                    (unsigned long long)b.pairs.pairs, (unsigned long long)b.pairs.replays);
-      }
+      const std::string what = path + ", " + std::to_string(threads) + " threads";
+      expect_same(a, b, what);
+      EXPECT_GT(b.pairs.pairs, 10u) << what;   // pairs in one sweep on several threads...
+      EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone (margin 1)
+      std::printf("[info] %s: %llu pairs in one sweep, %llu undone\n", what.c_str(),
+                  (unsigned long long)b.pairs.pairs, (unsigned long long)b.pairs.replays);
     }
-  }
-  set_screen_avx2(had_avx2);
+  });
 }
 
 // Where two steps cannot share a sweep (a wall that moves, recording, fewer particles than
