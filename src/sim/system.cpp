@@ -463,23 +463,21 @@ void System::step_pair() {
   // took 5 % of a two-thread run at 10^6; every 128, a pair undone takes at most 256 steps
   // again (none was undone in 1000 steps of the 10^6 gas: the margin keeps it rare).
   constexpr uint64_t kSnapPairs = 128;
-  if (nl.stats.builds == builds && nl.rebuild_due(open_drift_, walls, cfg.pair_margin * cfg.skin)) {
+  // Plain steps too on several threads where a block holds fewer than two spans of rows
+  // (PairSlots::chained: a block's tail and head apart; the force loop's set-up makes the
+  // same split).
+  auto short_blocks = [&] {
+    const long n = long(particles.size()), nt = omp_get_max_threads();
+    if (n <= cfg.parallel_min || nt < 2) return false;
+    slots_.plan(nl, n, nt);
+    return !slots_.chained;
+  };
+  if ((nl.stats.builds == builds && nl.rebuild_due(open_drift_, walls, cfg.pair_margin * cfg.skin)) ||
+      short_blocks()) {
     snap_.valid = false;
     end_step(true);
     step_once(true);
     return;
-  }
-  // On several threads the blocks must each hold two spans of rows (PairSlots::chained:
-  // a block's tail and head apart; the force loop's set-up makes the same split).
-  const long n = long(particles.size()), nt = omp_get_max_threads();
-  if (n > cfg.parallel_min && nt > 1) {
-    slots_.plan(nl, n, nt);
-    if (!slots_.chained) {
-      snap_.valid = false;
-      end_step(true);
-      step_once(true);
-      return;
-    }
   }
   if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.pairs >= kSnapPairs) take_snapshot();
   // Both steps in one sweep of the force loop (ForceContext::drift2); open_drift_ gets the
