@@ -251,6 +251,10 @@ Case parse(toml::table& root, const std::string& file) {
     const auto pmin = s.integer("parallel_min", 4000);
     if (pmin < 0) s.fail("parallel_min", "expected a particle count >= 0");
     c.cfg.parallel_min = long(pmin);
+    // Two steps in one sweep of the force loop (System::step_pair; the same results).
+    const bool pairs = s.boolean("pair_steps", true);
+    c.cfg.pair_min = long(s.integer("pair_min", 65536, 1));
+    if (!pairs) c.cfg.pair_min = -1;
     c.seed = uint64_t(s.integer("seed", 1));
     c.audit_velocity = s.num("audit_velocity", 0.0, 0, kInf, false, "m/s");
     s.finish();

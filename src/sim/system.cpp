@@ -371,6 +371,14 @@ void System::end_step(bool open_next) {
   opened_ = fuse;
 }
 
+bool System::pairs_off_by_env() {
+  static const bool off = [] {
+    const char* e = std::getenv("COHDEM_PAIR");
+    return e != nullptr && std::string(e) == "0";
+  }();
+  return off;
+}
+
 bool System::pairs_allowed() const {
   // pair_min particles per thread: on the development VM, two threads gained about 4 %
   // at 10^6 particles and lost about 11 % at 10^5 (docs/performance.md, thirty-fifth round).
@@ -378,11 +386,7 @@ bool System::pairs_allowed() const {
   if (cfg.pair_min < 0 || n < cfg.pair_min * nt || !opened_ || dirty_ || thermal || !pours.empty() ||
       cfg.record_contacts || !nl.attached.empty() || !nl.has_reference(particles.size()) || nl.tracks_radii())
     return false;
-  static const bool off = [] {
-    const char* e = std::getenv("COHDEM_PAIR");
-    return e != nullptr && std::string(e) == "0";
-  }();
-  if (off) return false;
+  if (pairs_off_by_env()) return false;
   // Walls that stay where they are: the second step's wall contacts are evaluated with the
   // walls of the first.
   for (const Wall& W : walls)

@@ -51,8 +51,9 @@ struct SimConfig {
   /// From this many particles per thread up, System::step_pair evaluates two steps in one
   /// sweep of the force loop where it may (walls at rest, no pours, thermal model or
   /// recording; on several threads, blocks of at least two planes' rows,
-  /// PairSlots::chained); below, and when negative, it takes them one at a time. The environment
-  /// variable COHDEM_PAIR=0 turns it off (for comparisons). Results are the same bits.
+  /// PairSlots::chained); below, and when negative, it takes them one at a time (case file:
+  /// `[simulation] pair_min`, and `pair_steps = false` for negative). The environment
+  /// variable COHDEM_PAIR=0 turns it off too (for comparisons). Results are the same bits.
   long pair_min = 65536;
   /// step_pair takes plain steps once the displacements since the lists' build reach this
   /// fraction of what triggers a rebuild (a rebuild falling between the two steps of a pair
@@ -125,6 +126,9 @@ class System {
   void step_pair();
   /// Whether step_pair can evaluate two steps in one sweep now (SimConfig::pair_min).
   bool pairs_allowed() const;
+  /// Whether the environment variable COHDEM_PAIR=0 switches step_pair's pairs off (for
+  /// comparisons; the case file's `pair_steps = false` does the same).
+  static bool pairs_off_by_env();
   /// step_pair's counts: pairs evaluated in one sweep, of those undone (a rebuild fell
   /// between the two steps), and the steps taken again.
   struct PairStats {
