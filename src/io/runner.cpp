@@ -295,11 +295,10 @@ int run_case(Case c, const RunOptions& opt) {
     const int nt = c.cfg.threads > 0 ? c.cfg.threads : omp_get_max_threads();
     // Two steps per sweep (System::step_pair): whether the size allows it; the run's walls,
     // pours and outputs decide step by step (summary.json's step_pairs counts them).
-    const long per = long(s.particles.size()) > c.cfg.parallel_min ? nt : 1;
     const std::string pairs = c.cfg.pair_min < 0        ? "off (pair_steps = false)"
                               : System::pairs_off_by_env() ? "off (COHDEM_PAIR=0)"
                               : c.thermal.enabled          ? "off (thermal model)"
-                              : long(s.particles.size()) < c.cfg.pair_min * per
+                              : !s.pairs_fit_size()
                                   ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
                                   : "where the run allows (summary.json: step_pairs)";
     spdlog::info("force loop: {} thread(s), list screening {}, two steps per sweep {}", nt,

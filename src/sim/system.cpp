@@ -379,11 +379,15 @@ bool System::pairs_off_by_env() {
   return off;
 }
 
-bool System::pairs_allowed() const {
+bool System::pairs_fit_size() const {
   // pair_min particles per thread: on the development VM, two threads gained about 4 %
   // at 10^6 particles and lost about 11 % at 10^5 (docs/performance.md, thirty-fifth round).
   const long n = long(particles.size()), nt = n > cfg.parallel_min ? long(omp_get_max_threads()) : 1;
-  if (cfg.pair_min < 0 || n < cfg.pair_min * nt || !opened_ || dirty_ || thermal || !pours.empty() ||
+  return cfg.pair_min >= 0 && n >= cfg.pair_min * nt;
+}
+
+bool System::pairs_allowed() const {
+  if (!pairs_fit_size() || !opened_ || dirty_ || thermal || !pours.empty() ||
       cfg.record_contacts || !nl.attached.empty() || !nl.has_reference(particles.size()) || nl.tracks_radii())
     return false;
   if (pairs_off_by_env()) return false;

@@ -129,6 +129,8 @@ class System {
   /// Whether the environment variable COHDEM_PAIR=0 switches step_pair's pairs off (for
   /// comparisons; the case file's `pair_steps = false` does the same).
   static bool pairs_off_by_env();
+  /// Whether the particle count reaches SimConfig::pair_min per thread (and pairs are on).
+  bool pairs_fit_size() const;
   /// step_pair's counts: pairs evaluated in one sweep, of those undone (a rebuild fell
   /// between the two steps), and the steps taken again.
   struct PairStats {
