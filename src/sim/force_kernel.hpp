@@ -169,18 +169,30 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     epoch = c.slots->next_epoch(nt_plan);
     if (two) pcall = c.slots->next_pair_call(nt_plan);
   }
-  // The arrays' pointers and the loop's constants are firstprivate, and the lambdas below are
-  // defined inside the region: shared, each use went through the region's record of the
-  // variable's address (two dependent loads, repeated after every store that might alias it);
-  // private copies stay in registers or one stack slot (the linear chute: 599 -> 557
-  // instructions per particle-step, bit-identical). res and slot_of stay shared: a team of
-  // another size sets them inside the region.
+  // The region's body is a function of its own (`region`), run by every thread of the
+  // parallel region, or called directly on one thread: a parallel region of one thread still
+  // sets up a team, and its barriers end with a futex wake-up, a system call (about a tenth of
+  // a 643-particle ring shear step on the development VM). The arrays' pointers and the loop's
+  // constants are its parameters, per thread, like the firstprivate copies they replace:
+  // shared, each use went through the region's record of the variable's address (two
+  // dependent loads, repeated after every store that might alias it); private copies stay in
+  // registers or one stack slot (the linear chute: 599 -> 557 instructions per particle-step,
+  // bit-identical). res, slot_of, epoch, pcall and timed stay shared: a team of another size
+  // sets them inside the region. Out of line: one copy for both callers
+  // (tests/cli/kernel_inlined.sh checks it has no calls left but the allowed ones).
   bool timed = false;  // the region's threads timed their sweeps
-#pragma omp parallel if (n > c.parallel_min) firstprivate(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, \
-                                                  inertia, flag, species, force, torque, rev, dt, grav, a_pair, want_a, \
-                                                  keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd, \
-                                                  lane_p)
-  {
+  auto region = [&](State* const __restrict hs, uint8_t* const __restrict live, const uint32_t* const __restrict start,
+                    const uint32_t* const __restrict jdx, const uint8_t* const __restrict image,
+                    const uint32_t* const __restrict rstart, const uint32_t* const __restrict rpair,
+                    const uint32_t* const __restrict wstart, const Vec3* const __restrict shift, Vec3* const __restrict x,
+                    Vec3* const __restrict v, Vec3* const __restrict omega, const double* const __restrict radius,
+                    const double* const __restrict mass, const double* const __restrict inertia,
+                    const uint8_t* const __restrict flag, const int32_t* const __restrict species,
+                    Vec3* const __restrict force, Vec3* const __restrict torque, PairResult* const __restrict rev,
+                    const double dt, const Vec3 grav, double* const a_pair, const bool want_a, const bool keep_pair,
+                    const double kick_h, const double open_dt, const uint32_t* const __restrict dep_lo,
+                    const Params* const __restrict params, const size_t nmat, const uint32_t entries, const bool simd,
+                    const void* const lane_p) __attribute__((noinline)) {
     const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
     if (share && nt != nt_plan) {
@@ -650,6 +662,16 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       c.drift->merge(drift);  // max / min / or: the same in any order
       if (two) c.drift2->merge(drift_b);
     }
+  };
+  if (n > c.parallel_min && omp_get_max_threads() > 1) {
+#pragma omp parallel
+    region(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, inertia, flag, species,
+           force, torque, rev, dt, grav, a_pair, want_a, keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd,
+           lane_p);
+  } else {
+    region(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, inertia, flag, species,
+           force, torque, rev, dt, grav, a_pair, want_a, keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd,
+           lane_p);
   }
   if (timed) c.slots->rebalance();
 }

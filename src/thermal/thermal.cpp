@@ -97,9 +97,12 @@ void ThermalModel::update(System& s, bool integrate) {
   const uint8_t* wlive = nl.whist.live.data();
   const int nm = nm_;
 
+  // Below parallel_min both passes run without entering an OpenMP construct (a region on one
+  // thread still sets up a team and ends with a futex wake-up, a system call each step; the
+  // sums are the same: each pass's reduction starts from zero).
+  const bool par = n > s.cfg.parallel_min;
   // Pass 1: conductance and heat flow into i of every live pair.
-#pragma omp parallel for schedule(dynamic, 256) if (n > s.cfg.parallel_min)
-  for (long i = 0; i < n; ++i) {
+  auto pass1 = [&](const long i) {
     const int si = P.species[i];
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) {
       if (!live[k]) continue;
@@ -115,13 +118,18 @@ void ThermalModel::update(System& s, bool integrate) {
       h_pair[k] = h;
       q_pair_[k] = h * (P.temperature[j] - P.temperature[i]);
     }
+  };
+  if (par) {
+#pragma omp parallel for schedule(dynamic, 256)
+    for (long i = 0; i < n; ++i) pass1(i);
+  } else {
+    for (long i = 0; i < n; ++i) pass1(i);
   }
 
   // Pass 2: per particle, in list order: pairs, fixed-temperature walls, sources; integrate.
   const double S = set_.time_scale, dt = s.cfg.dt;
   double stab = 0, power = 0;
-#pragma omp parallel for schedule(static) reduction(max : stab) reduction(+ : power) if (n > s.cfg.parallel_min)
-  for (long i = 0; i < n; ++i) {
+  auto pass2 = [&](const long i, double& stab, double& power) {
     const int si = P.species[i];
     double Q = 0, H = 0;
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
@@ -150,7 +158,7 @@ void ThermalModel::update(System& s, bool integrate) {
     }
     power += Ps;
     P.heat_flow[i] = Q + Ps;
-    if (!integrate) continue;
+    if (!integrate) return;
     const double mc = P.mass[i] * cp_[si] / S;
     stab = std::max(stab, H * dt / mc);
     P.temperature[i] += (Q + Ps) * dt / mc;
@@ -158,6 +166,12 @@ void ThermalModel::update(System& s, bool integrate) {
       P.radius[i] = P.radius0[i] * (1.0 + alpha_[si] * (P.temperature[i] - tref_[si]));
       P.inertia[i] = 0.4 * P.mass[i] * P.radius[i] * P.radius[i];
     }
+  };
+  if (par) {
+#pragma omp parallel for schedule(static) reduction(max : stab) reduction(+ : power)
+    for (long i = 0; i < n; ++i) pass2(i, stab, power);
+  } else {
+    for (long i = 0; i < n; ++i) pass2(i, stab, power);
   }
   source_power = power;
   wall_heat.assign(s.walls.size(), 0.0);

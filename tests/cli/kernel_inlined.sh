@@ -3,13 +3,14 @@
 # inliner gives up inside the kernels' large OpenMP functions, and a restructured loop once
 # left ContactLaw::evaluate, then every sub-model, as calls (3-10 % of a chute's speed, and
 # nothing else showed it). This lists the calls in each `compute(...) [clone ._omp_fn.N]`
-# of the optimized binary and fails on any call into cohdem's own code other than the wall
+# of the optimized binary (and in the region function each of them runs, compute's
+# `region`) and fails on any call into cohdem's own code other than the wall
 # geometry (rare entries), the wall contacts of a particle (ContactModelImpl::wall_contacts,
 # kept out of line on purpose: only particles with wall entries call it), the thread
 # split's set-up (PairSlots, once per list build), the AVX2 screening of a batch
 # (screen_avx2: compiled for AVX2 alone, so it cannot be inlined into the portable kernel),
 # the finish of free particles four at a time (finish_free_avx2: one call per run of them,
-# AVX2 alone for the same reason),
+# AVX2 alone for the same reason), the region function from its parallel region and a vector's destructor (once a call each),
 # the contacts of the laws with lanes (linear_, hertz_, mepa_lanes_avx2 and their _epsd_
 # forms: one call per 16 contacts, AVX2 alone for the same reason) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
 # libgomp; operator new/delete) are allowed. Skipped, saying so, for a build that is not
@@ -26,13 +27,17 @@ command -v objdump > /dev/null || { echo "FAIL objdump not found (package binuti
 objdump -d --no-show-raw-insn -C "$bin" | awk '
   /^[0-9a-f]+ <.*>:$/ {
     fn = $0
-    k = index(fn, "::compute(cohdem::ForceContext&) const [clone ._omp_fn.") > 0
+    # the region run by every thread (or called directly on one thread: compute(...)::
+    # {lambda(...)#1}, the first lambda defined in compute whose parameters start with the
+    # contact history), and the parallel region that calls it
+    k = index(fn, "::compute(cohdem::ForceContext&) const [clone ._omp_fn.") > 0 || \
+        (index(fn, "::compute(cohdem::ForceContext&) const::{lambda(") > 0 && index(fn, "State*") > 0 && index(fn, "operator()") > 0)
     if (k) kernels++
     next
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/ || (t ~ /::compute\(cohdem::ForceContext&\) const::\{lambda\(/ && t ~ /State\*/) || t ~ /std::vector<.*>::~vector\(\)/) next
     bad[t]++
   }
   END {
