@@ -5,6 +5,7 @@ rounds in docs/performance.md ("What was changed for speed") measure each change
   python3 bench/ab.py CASE --a OLD/cohdem --b build/cohdem --duration 0.5 --rounds 10
   python3 bench/ab.py CASE --a build/cohdem --env-b "COHDEM_SIMD=0" --rounds 8
   python3 bench/ab.py CASE --a OLD/cohdem --b build/cohdem --together --rounds 16
+  python3 bench/ab.py main --a OLD/cohdem --b build/cohdem --rounds 4    # the main job, whole (about 45 s a run)
 
 This machine's host moves a run's speed by up to 2.5x from minute to minute, so one run of
 each says nothing about a change of a few per cent. Two ways to pair the runs:
@@ -55,20 +56,29 @@ def parse_env(text):
 
 
 def run(binary, env_extra, case, a, core, out):
-    """One run of binary on case (pinned to core unless None): its rate and its final state."""
+    """One run of binary on case (pinned to core unless None): its rate and its final state.
+    case "main": the main job, the embedded default case, whole (a ring shear test: its
+    final state is its yield locus and shear points)."""
     env = dict(os.environ)
     env.update(env_extra)
-    cmd = [binary, "run", case, "--set", f"simulation.duration={a.duration!r}", "--threads", str(a.threads),
-           "--out", out, "--quiet"]
+    if case == "main":
+        cmd = [binary, "run", "--threads", str(a.threads), "--out", out, "--quiet"]
+    else:
+        cmd = [binary, "run", case, "--set", f"simulation.duration={a.duration!r}", "--threads", str(a.threads),
+               "--out", out, "--quiet"]
     pc.sh(cmd, None, out + ".log", cpu=core, env=env)
     with open(os.path.join(out, "summary.json")) as f:
         s = json.load(f)
+    if case == "main":
+        return s["particle_steps_per_s"], (json.dumps(s["yield_locus"], sort_keys=True),
+                                           json.dumps(s["shear_points"], sort_keys=True))
     return s["particle_steps_per_s"], (s["kinetic_energy"], s["contacts"])
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", help="a cohdem case file")
+    ap.add_argument("case", help="a cohdem case file, or 'main': the main job (the embedded default case, whole;"
+                                 " --duration does not apply)")
     ap.add_argument("--a", required=True, help="binary A (the reference)")
     ap.add_argument("--b", help="binary B (default: A, with --env-b)")
     ap.add_argument("--env-a", default="", help="environment for A's runs, 'KEY=VALUE ...'")
@@ -82,7 +92,7 @@ def main():
         sys.exit("ab.py: --rounds: expected at least 1")
     if not (a.duration > 0 and math.isfinite(a.duration)):
         sys.exit("ab.py: --duration: expected a positive number of seconds")
-    if not os.path.isfile(a.case):
+    if a.case != "main" and not os.path.isfile(a.case):
         sys.exit(f"ab.py: case file '{a.case}' not found")
     b_bin = a.b or a.a
     for label, path in (("--a", a.a), ("--b", b_bin)):
@@ -126,7 +136,8 @@ def main():
         sys.exit(f"ab.py: {e}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    print(f"\n{a.case}, {a.duration!r} s simulated, {a.threads} thread(s), {a.rounds} rounds"
+    what = "the main job (embedded default case)" if a.case == "main" else f"{a.case}, {a.duration!r} s simulated"
+    print(f"\n{what}, {a.threads} thread(s), {a.rounds} rounds"
           f"{' (together)' if a.together else ' (alternated)'}")
     print(f"A: median {statistics.median(ra):.4g}, best {max(ra):.4g} particle-steps/s")
     print(f"B: median {statistics.median(rb):.4g}, best {max(rb):.4g} particle-steps/s")
@@ -135,7 +146,8 @@ def main():
         cyc = [math.prod(ratio[q:q + 4]) ** 0.25 for q in range(0, len(ratio) - 3, 4)]
         print(f"B/A over whole cycles (geometric mean of each four rounds: both start orders on both"
               f" core assignments): median {statistics.median(cyc):.3f} ({' '.join(f'{c:.3f}' for c in cyc)})")
-    print(f"same bits (kinetic energy and contacts of every run): {'yes' if same else 'no'}")
+    state = "yield locus and shear points" if a.case == "main" else "kinetic energy and contacts"
+    print(f"same bits ({state} of every run): {'yes' if same else 'no'}")
 
 
 if __name__ == "__main__":
