@@ -173,13 +173,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // parallel region, or called directly on one thread: a parallel region of one thread still
   // sets up a team, and its barriers end with a futex wake-up, a system call (about a tenth of
   // a 643-particle ring shear step on the development VM). The arrays' pointers and the loop's
-  // constants are its parameters, per thread, like the firstprivate copies they replace:
-  // shared, each use went through the region's record of the variable's address (two
-  // dependent loads, repeated after every store that might alias it); private copies stay in
-  // registers or one stack slot (the linear chute: 599 -> 557 instructions per particle-step,
-  // bit-identical). res, slot_of, epoch, pcall and timed stay shared: a team of another size
-  // sets them inside the region. Out of line: one copy for both callers
-  // (tests/cli/kernel_inlined.sh checks it has no calls left but the allowed ones).
+  // constants are its parameters, per thread, like the firstprivate copies they replace (as
+  // shared variables, each use went through the region's record of the variable's address:
+  // two dependent loads, repeated after every store that might alias it; private copies stay
+  // in registers or one stack slot: the linear chute 599 -> 557 instructions per
+  // particle-step, bit-identical; 306.1 on the chute before and after this change). res,
+  // slot_of, epoch, pcall and timed stay shared: a team of another size sets them inside the
+  // region. Out of line: one copy for both callers (tests/cli/kernel_inlined.sh checks it has
+  // no calls left but the allowed ones).
   bool timed = false;  // the region's threads timed their sweeps
   auto region = [&](State* const __restrict hs, uint8_t* const __restrict live, const uint32_t* const __restrict start,
                     const uint32_t* const __restrict jdx, const uint8_t* const __restrict image,
