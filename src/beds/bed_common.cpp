@@ -59,21 +59,29 @@ void advance(System& s, double duration, const std::string& label, bool quiet,
 }
 
 void advance_steps(System& s, uint64_t n, const std::string& label, bool quiet, const std::function<void(System&)>& sample,
-                   uint64_t every, const std::function<void(System&)>& after) {
+                   uint64_t every, const std::function<void(System&)>& after,
+                   const std::function<bool(const System&)>& after_reads) {
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   auto last = t0;
   for (uint64_t k = 1; k <= n; ++k) {
-    s.step_once();
-    if (sample && every && k % every == 0) sample(s);
+    // What reads the state after this step is decided before it (the clock read here): a
+    // step after which nothing does lets the force loop apply the next step's opening
+    // half-kick and drift (System::step_once(true), the same operations, bit-identical).
+    const auto now = clock::now();
+    const bool progress_due = !quiet && std::chrono::duration<double>(now - last).count() >= 10;
+    const bool sample_due = sample && every && k % every == 0;
+    const bool check_due = k % 1000 == 0 || k == n;
+    const bool open = k < n && !progress_due && !sample_due && !check_due && (!after || (after_reads && !after_reads(s)));
+    s.step_once(open);
+    if (sample_due) sample(s);
     if (after) after(s);
-    if (k % 1000 == 0 || k == n) {
+    if (check_due) {
       const Vec3 x = s.particles.size() ? s.particles.x[0] : Vec3{};
       if (!std::isfinite(x.x + x.y + x.z + s.kinetic_energy()))
         throw RunError(label + ": non-finite state at t = " + std::to_string(s.time) + " s (time step too large?)");
     }
-    const auto now = clock::now();
-    if (!quiet && std::chrono::duration<double>(now - last).count() >= 10) {
+    if (progress_due) {
       last = now;
       const double el = std::chrono::duration<double>(now - t0).count();
       spdlog::info("{}: t = {:.4f} s, step {}/{}, {} particles, KE {:.3g} J, ETA {:.0f} s", label, s.time, k, n,
@@ -145,16 +153,23 @@ void run_stage(Stage& st, const Case& c, const BedOptions& o, const std::filesys
   auto last = clock::now();
   const double interval = c.output.checkpoint_interval;
   // Samples at the steps that are multiples of `every` counted from t = 0, so that a resumed
-  // stage samples where the uninterrupted one did.
+  // stage samples where the uninterrupted one did. Whether a checkpoint follows a step is
+  // decided before it (after_reads), so that the step before a checkpoint or a sample is
+  // complete (advance_steps lets the others take the fused opening).
+  bool ck_due = false;
+  auto after_reads = [&](const System& sys) {
+    const uint64_t next = sys.step + 1;  // the step about to be taken
+    ck_due = interval > 0 && next < n && std::chrono::duration<double>(clock::now() - last).count() >= interval;
+    return ck_due || (sample && every && next % every == 0);
+  };
   auto after = [&](System& sys) {
     if (sample && every && sys.step % every == 0) sample(sys);
-    if (interval <= 0) return;
-    const auto now = clock::now();
-    if (std::chrono::duration<double>(now - last).count() < interval || sys.step >= n) return;
+    if (!ck_due) return;
     write(false);
-    last = now;
+    last = clock::now();
+    ck_due = false;
   };
-  if (s.step < n) advance_steps(s, n - s.step, label, o.quiet, {}, 0, after);
+  if (s.step < n) advance_steps(s, n - s.step, label, o.quiet, {}, 0, after, after_reads);
   if (!st.complete) write(true);
   st.complete = true;
 }

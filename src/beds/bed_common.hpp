@@ -40,8 +40,13 @@ std::unique_ptr<System> clone(const Case& c, const System& src);
 void advance(System& s, double duration, const std::string& label, bool quiet,
              const std::function<void(System&)>& sample = {}, uint64_t every = 0);
 /// The same for `n` steps, calling `after` (when given) after every step, after `sample`.
+/// Steps after which nothing reads the particles take the force loop's fused opening
+/// (System::step_once(true), bit-identical): not those followed by a sample, a finite-state
+/// check or a progress line, nor the last; with `after`, only where `after_reads` (called
+/// before the step) says `after` will not read the state after it (no `after_reads`: never).
 void advance_steps(System& s, uint64_t n, const std::string& label, bool quiet, const std::function<void(System&)>& sample,
-                   uint64_t every, const std::function<void(System&)>& after = {});
+                   uint64_t every, const std::function<void(System&)>& after = {},
+                   const std::function<bool(const System&)>& after_reads = {});
 
 /// A protocol's long stage (the fill of a bed, a thermal cycling run: the case's `duration`
 /// from its start), resumable. Without --resume, or with --resume but no checkpoint at `ckpt`
