@@ -617,8 +617,7 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
   if (!has_reference(p.size())) return true;
   const long n = long(p.size());
   Drift d;
-#pragma omp parallel for reduction(drift : d) schedule(static) if (n > parallel_min)
-  for (long i = 0; i < n; ++i) add_drift(d, p, size_t(i));
+  drift_pass(n, n > parallel_min, d, [&](const long i, Drift& di) { add_drift(di, p, size_t(i)); });
   return rebuild_due(d, walls, skin);
 }
 

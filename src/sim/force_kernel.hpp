@@ -160,7 +160,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (two && !c.slots->chained)
       throw std::logic_error("force loop: two steps in one sweep on several threads need blocks of 2 spans (chained)");
   };
-  const long nt_plan = n > c.parallel_min ? long(omp_get_max_threads()) : 1;
+  // Several threads above parallel_min (and with more than one to have); else `region`
+  // below runs without an OpenMP region.
+  const bool parallel = n > c.parallel_min && omp_get_max_threads() > 1;
+  const long nt_plan = parallel ? long(omp_get_max_threads()) : 1;
   // The call's number for the chained finishing's hand-offs (PairSlots::HandOff).
   uint32_t epoch = 0;
   uint64_t pcall = 0;  // and for the stages of a two-step call (PairSlots::Stage)
@@ -664,7 +667,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if (two) c.drift2->merge(drift_b);
     }
   };
-  if (n > c.parallel_min && omp_get_max_threads() > 1) {
+  if (parallel) {
 #pragma omp parallel
     region(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, inertia, flag, species,
            force, torque, rev, dt, grav, a_pair, want_a, keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd,

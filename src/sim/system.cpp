@@ -304,27 +304,18 @@ void System::begin_step() {
     P.v[i] = W.velocity_at(P.x[i], t1);
     P.omega[i] = W.omega;
   };
-  // Below parallel_min the loops run without entering an OpenMP construct: a region on one
-  // thread still sets up a team and ends with a futex wake-up, a system call (about a tenth
-  // of a small system's step on the development VM). The reduction is exact, so the two
-  // forms agree bit for bit.
+  // Below parallel_min on one thread, with no OpenMP region (drift_pass).
   if (opened) {
     // Only the attached particles are left (the list's record of them: flags change only
     // with a prepare(), which rebuilds it); none, no parallel region either.
     const std::vector<uint32_t>& att = nl.attached;
     const long na = long(att.size());
-    auto carry_q = [&](const long q, Drift& d) {
+    drift_pass(na, na > cfg.parallel_min, drift, [&](const long q, Drift& d) {
       carry(att[size_t(q)]);
       if (tracked) nl.add_drift(d, P, att[size_t(q)]);
-    };
-    if (na > cfg.parallel_min) {
-#pragma omp parallel for reduction(drift : drift) schedule(static)
-      for (long q = 0; q < na; ++q) carry_q(q, drift);
-    } else {
-      for (long q = 0; q < na; ++q) carry_q(q, drift);
-    }
+    });
   } else {
-    auto open_i = [&](const long i, Drift& d) {
+    drift_pass(n, n > cfg.parallel_min, drift, [&](const long i, Drift& d) {
       const uint8_t f = P.flag[i];
       if (f == kFree) {
         // In registers, each result stored once: x[i] += v[i] dt right after storing v[i]
@@ -337,13 +328,7 @@ void System::begin_step() {
         carry(size_t(i));
       }
       if (tracked) nl.add_drift(d, P, size_t(i));  // frozen particles only mark the set
-    };
-    if (n > cfg.parallel_min) {
-#pragma omp parallel for reduction(drift : drift) schedule(static)
-      for (long i = 0; i < n; ++i) open_i(i, drift);
-    } else {
-      for (long i = 0; i < n; ++i) open_i(i, drift);
-    }
+    });
   }
   time = t1;
   ++step;
