@@ -478,6 +478,21 @@ int run_case(Case c, const RunOptions& opt) {
     j["mean_velocity"] = {p.x * im, p.y * im, p.z * im};
   }
   j["threads"] = omp_get_max_threads();
+  {  // where the threads' time went, when the force loop ran on several (PairSlots' totals)
+    const PairSlots& ts = s.thread_split();
+    if (ts.timed_calls > 0 && nsteps > 0) {
+      const double calls = double(ts.timed_calls);
+      nlohmann::json sweep = nlohmann::json::array(), handed = nlohmann::json::array();
+      for (size_t t = 0; t < ts.busy_total.size(); ++t) {
+        sweep.push_back(1e6 * ts.busy_total[t] / calls);
+        handed.push_back(double(ts.handed_total[t]) / calls);
+      }
+      j["thread_sweep"] = {{"force_calls", ts.timed_calls},
+                           {"sweep_us_per_call", sweep},
+                           {"handed_over_per_call", handed},
+                           {"loop_us_per_step", 1e6 * loop_s / double(nsteps)}};
+    }
+  }
   j["screening"] = screen_avx2_enabled() ? "avx2" : "scalar";  // the force loop's list screening (results identical)
   j["peak_rss_bytes"] = std::max(peak_rss_setup, peak_rss_bytes());  // whole process
   j["peak_rss_run_bytes"] = peak_rss_bytes();  // from the start of the time loop

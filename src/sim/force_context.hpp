@@ -215,6 +215,13 @@ struct PairSlots {
   }
   uint32_t epoch = 0;  ///< force calls made through this PairSlots, the last one's number (wraps)
   uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
+  /// Since the slots were made, for the run's summary (summary.json's thread_sweep): force
+  /// calls timed on several threads (rebalance()), and per thread the seconds of its sweeps
+  /// (measured(): its block and the head it finished for the thread after it, waits left
+  /// out) and the particles of its block it handed to the thread before (hand_over()).
+  uint64_t timed_calls = 0;
+  std::vector<double> busy_total;
+  std::vector<uint64_t> handed_total;
   /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
   /// before the parallel region).
   /// At the wrap the records are cleared, so that no record keeps a number that a later
@@ -237,6 +244,7 @@ struct PairSlots {
     HandOff& H = hand[size_t(t)];
     H.list = list.data();
     H.count = list.size();
+    handed_total[size_t(t)] += list.size();
     H.epoch.store(call, std::memory_order_release);
     H.epoch.notify_all();  // a load, unless the thread that takes the list sleeps on it
   }
@@ -281,6 +289,10 @@ struct PairSlots {
       busy.assign(size_t(nt), 0.0);
       swept.assign(size_t(nt), 0.0);
       calls = 0;
+      if (busy_total.size() < size_t(nt)) {
+        busy_total.resize(size_t(nt), 0.0);
+        handed_total.resize(size_t(nt), 0);
+      }
     }
     stale = false;
     mapped = false;
@@ -321,6 +333,7 @@ struct PairSlots {
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
   void measured(long t, double seconds) {
     busy[size_t(t)] += seconds;
+    busy_total[size_t(t)] += seconds;
     swept[size_t(t)] += double(block_work(t));
   }
   /// After a force call whose threads each called measured(): every kRebalanceCalls calls,
@@ -329,6 +342,7 @@ struct PairSlots {
   /// boundary moves, and halving damps the overshoot), none below kMinShare of an equal
   /// share. The split is redone only when a share moves by more than 0.2 % of the total work.
   void rebalance() {
+    ++timed_calls;
     if (++calls < kRebalanceCalls) return;
     calls = 0;
     const size_t nt = share.size();

@@ -25,6 +25,9 @@ struct State {
   size_t contacts = 0;
   int threads = 0;
   uint64_t chained_calls = 0;  ///< force calls that ended without the barrier
+  uint64_t timed_calls = 0;    ///< force calls on several threads (PairSlots' totals)
+  std::vector<double> busy;    ///< per thread, seconds of its sweeps
+  std::vector<uint64_t> handed;  ///< per thread, particles it handed to the thread before
 };
 
 // 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run:
@@ -83,6 +86,9 @@ State run(int threads, bool record = false, bool column = false) {
   State st = state_of(*s);
   st.contacts = contacts;
   st.chained_calls = s->thread_split().chained_calls;
+  st.timed_calls = s->thread_split().timed_calls;
+  st.busy = s->thread_split().busy_total;
+  st.handed = s->thread_split().handed_total;
   return st;
 }
 
@@ -155,6 +161,19 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   EXPECT_GT(r.chained_calls, 300u);
   expect_identical(a, b);
   expect_identical(a, r);
+  // The totals behind summary.json's thread_sweep: every call on two threads timed (the
+  // chained ones among them), both threads' sweeps timed, and only thread 1 hands particles
+  // over (to thread 0), fewer a call than the particles.
+  EXPECT_EQ(a.timed_calls, 0u);
+  EXPECT_GE(b.timed_calls, b.chained_calls);
+  EXPECT_LE(b.timed_calls, 401u);  // 400 steps and the first force evaluation
+  ASSERT_EQ(b.busy.size(), 2u);
+  ASSERT_EQ(b.handed.size(), 2u);
+  EXPECT_GT(b.busy[0], 0.0);
+  EXPECT_GT(b.busy[1], 0.0);
+  EXPECT_EQ(b.handed[0], 0u);
+  EXPECT_GT(b.handed[1], 0u);
+  EXPECT_LT(b.handed[1], b.timed_calls * uint64_t(b.x.size()));
   std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
               (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
 }
