@@ -31,6 +31,12 @@ landed. The table then adds, for two threads: the speed-up over the mean of the 
 one-thread medians (on equal cores, the usual speed-up) and over the fastest core's, and the
 efficiency, the two-thread median over the sum of the cores' one-thread medians.
 
+Where two threads' time goes (a table after the first, from each run's summary.json
+`thread_sweep`): the one- and two-thread steps, each thread's sweep of its block per force
+call (waits left out), both sweeps over the one-thread step (above 1: work the split adds,
+such as the particles finished across the block boundary; below 1: each core's own cache),
+and the two-thread step beyond the longer sweep (the list builds, waits and joins).
+
 --lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
 once per repeat, with bench/peers/in.packing on the same data file and for the same number of
 steps: what the best-known peer's cost per particle-step does from size to size on this
@@ -130,7 +136,7 @@ def main():
         where = f" on core {cpu}" if cpu is not None else ""
         print(f"  run {r + 1}: {label:>16s}, LAMMPS{where}: {rate:10.4g} particle-steps/s (cohdem {ours:.4g})", flush=True)
 
-    best, allr, pair = {}, {}, {}
+    best, allr, pair, steps = {}, {}, {}, {}
     for r in range(a.repeat):
         for key, label, case in probs:
             for t in threads:
@@ -141,6 +147,13 @@ def main():
                 print(f"  run {r + 1}: {label:>16s}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
                 k = (key, t)
                 allr.setdefault(k, []).append(rate)
+                # The step loop's time a step, and on several threads where it went
+                # (summary.json's thread_sweep: each thread's sweep per force call).
+                ts = j.get("thread_sweep")
+                steps.setdefault(k, []).append(
+                    {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
+                     "sweep_us": ts["sweep_us_per_call"] if ts else None,
+                     "handed": sum(ts["handed_over_per_call"]) if ts else None})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
             for cpu in cores:
@@ -212,6 +225,29 @@ def main():
                     row["speedup_mean_core"] = two / mean
                     if key in pair:  # --ceiling on the same scale: two independent runs at once
                         row["ceiling_mean_core"] = statistics.median(pair[key]) / mean
+    if 1 in threads and any(x["sweep_us"] for v in steps.values() for x in v):
+        print(f"\nwhere the two threads' time goes (medians of {a.repeat} runs; a sweep: one thread's block and "
+              "the head it finishes for the next, per force call, waits left out)")
+        print("| particles | 1 thread: a step (us) | 2 threads: a step (us) | a thread's sweep (us, mean) | "
+              "sweeps / 1-thread step | step - longest sweep (us) | particles handed over a call |")
+        print("|---:|---:|---:|---:|---:|---:|---:|")
+        for key, label, _ in probs:
+            two = [x for x in steps.get((key, 2), []) if x["sweep_us"]]
+            one = steps.get((key, 1), [])
+            if not two or not one:
+                continue
+            one_us = statistics.median(x["loop_us"] for x in one)
+            two_us = statistics.median(x["loop_us"] for x in two)
+            mean_sweep = statistics.median(sum(x["sweep_us"]) / len(x["sweep_us"]) for x in two)
+            work = statistics.median(sum(x["sweep_us"]) / one_us for x in two)
+            rest = statistics.median(x["loop_us"] - max(x["sweep_us"]) for x in two)
+            handed = statistics.median(x["handed"] for x in two)
+            print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {handed:.0f} |")
+            for row in rows:
+                if row["problem"] == label and row["threads"] == 2:
+                    row["step_us_one_thread"], row["step_us"] = one_us, two_us
+                    row["sweep_us_mean"], row["sweeps_over_one_thread_step"] = mean_sweep, work
+                    row["step_minus_longest_sweep_us"], row["handed_over_per_call"] = rest, handed
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):

@@ -110,6 +110,10 @@ def scaling(a, out):
         # independent one-thread runs started together gave (the most any two-thread code could
         # reach here), each over the mean of the cores' one-thread medians.
         speed[label] = {k: two[k] for k in ("one_thread_per_core", "speedup_mean_core", "ceiling_mean_core")}
+        # Where the two threads' time went (summary.json's thread_sweep, through scaling.py).
+        for k in ("sweeps_over_one_thread_step", "step_minus_longest_sweep_us", "handed_over_per_call"):
+            if k in two:
+                speed[label][k] = two[k]
         speed[label]["speedup_unpinned"] = two["median_particle_steps_per_s"] / one["median_particle_steps_per_s"]
         # The last run of each thread count (scaling.py keeps each one's output folder).
         s1, s2 = (json.load(open(os.path.join(d, f"run_{key}_{t}", "summary.json"))) for t in (1, 2))
@@ -192,6 +196,14 @@ def table(got):
             return f"{k} **{v['speedup_mean_core']:.2f}x**" + (f" (two runs at once {c:.2f}x)" if c else "")
         meas = ("; ".join(one(k, v) for k, v in sp.items()) +
                 f" (over the mean core's one-thread median); final state identical on {sum(same)} of {len(same)} problems")
+        # Where the time went, on the problems that ran their force loop on two threads (a
+        # gas below parallel_min runs it on one): both threads' sweeps over the one-thread
+        # step (the work the split adds), and the step beyond the longer sweep (waits, joins).
+        parts = [f"{k} {v['sweeps_over_one_thread_step']:.2f}x, {v['step_minus_longest_sweep_us']:.0f} us"
+                 for k, v in sp.items() if "sweeps_over_one_thread_step" in v]
+        if parts:
+            meas += ("; the two threads' sweeps over the one-thread step, and a step beyond the longer sweep: " +
+                     "; ".join(parts))
         ok = ident and all(v["speedup_mean_core"] >= 1.8 for v in sp.values())
         status = verdict(ok)
         if not ok:
