@@ -35,7 +35,8 @@ Where two threads' time goes (a table after the first, from each run's summary.j
 `thread_sweep`): the one- and two-thread steps, each thread's sweep of its block per force
 call (waits left out), both sweeps over the one-thread step (above 1: work the split adds,
 such as the particles finished across the block boundary; below 1: each core's own cache),
-and the two-thread step beyond the longer sweep (the list builds, waits and joins).
+the two-thread step beyond the longer sweep (the list builds, waits and joins), and the time
+the threads spend finishing the particles handed across the block boundaries.
 
 --lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
 once per repeat, with bench/peers/in.packing on the same data file and for the same number of
@@ -153,6 +154,7 @@ def main():
                 steps.setdefault(k, []).append(
                     {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
                      "sweep_us": ts["sweep_us_per_call"] if ts else None,
+                     "head_us": sum(ts.get("head_us_per_call", [])) if ts else None,
                      "handed": sum(ts["handed_over_per_call"]) if ts else None})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
@@ -229,8 +231,9 @@ def main():
         print(f"\nwhere the two threads' time goes (medians of {a.repeat} runs; a sweep: one thread's block and "
               "the head it finishes for the next, per force call, waits left out)")
         print("| particles | 1 thread: a step (us) | 2 threads: a step (us) | a thread's sweep (us, mean) | "
-              "sweeps / 1-thread step | step - longest sweep (us) | particles handed over a call |")
-        print("|---:|---:|---:|---:|---:|---:|---:|")
+              "sweeps / 1-thread step | step - longest sweep (us) | particles handed over a call | "
+              "finishing them (us a call) |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|")
         for key, label, _ in probs:
             two = [x for x in steps.get((key, 2), []) if x["sweep_us"]]
             one = steps.get((key, 1), [])
@@ -242,12 +245,15 @@ def main():
             work = statistics.median(sum(x["sweep_us"]) / one_us for x in two)
             rest = statistics.median(x["loop_us"] - max(x["sweep_us"]) for x in two)
             handed = statistics.median(x["handed"] for x in two)
-            print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {handed:.0f} |")
+            head = statistics.median(x["head_us"] or 0.0 for x in two)
+            print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {handed:.0f} | "
+                  f"{head:.1f} |")
             for row in rows:
                 if row["problem"] == label and row["threads"] == 2:
                     row["step_us_one_thread"], row["step_us"] = one_us, two_us
                     row["sweep_us_mean"], row["sweeps_over_one_thread_step"] = mean_sweep, work
                     row["step_minus_longest_sweep_us"], row["handed_over_per_call"] = rest, handed
+                    row["head_us"] = head
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):

@@ -482,13 +482,16 @@ int run_case(Case c, const RunOptions& opt) {
     const PairSlots& ts = s.thread_split();
     if (ts.timed_calls > 0 && nsteps > 0) {
       const double calls = double(ts.timed_calls);
-      nlohmann::json sweep = nlohmann::json::array(), handed = nlohmann::json::array();
+      nlohmann::json sweep = nlohmann::json::array(), handed = nlohmann::json::array(),
+                     head = nlohmann::json::array();
       for (size_t t = 0; t < ts.busy_total.size(); ++t) {
         sweep.push_back(1e6 * ts.busy_total[t] / calls);
+        head.push_back(1e6 * ts.head_total[t] / calls);
         handed.push_back(double(ts.handed_total[t]) / calls);
       }
       j["thread_sweep"] = {{"force_calls", ts.timed_calls},
                            {"sweep_us_per_call", sweep},
+                           {"head_us_per_call", head},  // of the sweep: the next block's head finished
                            {"handed_over_per_call", handed},
                            {"loop_us_per_step", 1e6 * loop_s / double(nsteps)}};
     }

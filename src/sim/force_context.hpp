@@ -222,6 +222,9 @@ struct PairSlots {
   uint64_t timed_calls = 0;
   std::vector<double> busy_total;
   std::vector<uint64_t> handed_total;
+  /// Per thread, of busy_total: the seconds it spent finishing the head handed over by the
+  /// thread after it (the particles that depend on both blocks).
+  std::vector<double> head_total;
   /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
   /// before the parallel region).
   /// At the wrap the records are cleared, so that no record keeps a number that a later
@@ -292,6 +295,7 @@ struct PairSlots {
       if (busy_total.size() < size_t(nt)) {
         busy_total.resize(size_t(nt), 0.0);
         handed_total.resize(size_t(nt), 0);
+        head_total.resize(size_t(nt), 0.0);
       }
     }
     stale = false;
@@ -331,9 +335,11 @@ struct PairSlots {
   /// Modelled work of block t of the current split.
   uint64_t block_work(long t) const { return prefix[size_t(bound[size_t(t + 1)])] - prefix[size_t(bound[size_t(t)])]; }
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
-  void measured(long t, double seconds) {
+  /// head: of those seconds, the ones spent finishing the head of block t + 1.
+  void measured(long t, double seconds, double head = 0.0) {
     busy[size_t(t)] += seconds;
     busy_total[size_t(t)] += seconds;
+    head_total[size_t(t)] += head;
     swept[size_t(t)] += double(block_work(t));
   }
   /// After a force call whose threads each called measured(): every kRebalanceCalls calls,

@@ -627,16 +627,17 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     if (share) {
       if (hand_at != std::numeric_limits<long>::max()) hand_over();  // an empty block
       own.swap(c.slots->deferred[size_t(tid)]);  // a buffer handed over stays where it is
-      double busy = omp_get_wtime() - t_sweep - waited;
+      double busy = omp_get_wtime() - t_sweep - waited, head = 0.0;
       if (chain && tid + 1 < nt) {
         const PairSlots::HandOff& H = c.slots->wait_for(tid + 1, epoch);
         const double t0 = omp_get_wtime();
         const long ta = block(tid + 1), tb = block(tid + 2);
         Drift& d = two ? drift_b : drift;  // a two-step call hands over the second step's head
         for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, d);
-        busy += omp_get_wtime() - t0;  // the waiting is not this block's work
+        head = omp_get_wtime() - t0;  // the waiting is not this block's work
+        busy += head;
       }
-      c.slots->measured(tid, busy);
+      c.slots->measured(tid, busy, head);
       if (tid == 0) {
         timed = true;
         c.slots->chained_calls += chain;

@@ -28,6 +28,7 @@ struct State {
   uint64_t timed_calls = 0;    ///< force calls on several threads (PairSlots' totals)
   std::vector<double> busy;    ///< per thread, seconds of its sweeps
   std::vector<uint64_t> handed;  ///< per thread, particles it handed to the thread before
+  std::vector<double> head;      ///< per thread, seconds of its sweeps finishing the next block's head
 };
 
 // 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run:
@@ -89,6 +90,7 @@ State run(int threads, bool record = false, bool column = false) {
   st.timed_calls = s->thread_split().timed_calls;
   st.busy = s->thread_split().busy_total;
   st.handed = s->thread_split().handed_total;
+  st.head = s->thread_split().head_total;
   return st;
 }
 
@@ -174,6 +176,11 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   EXPECT_EQ(b.handed[0], 0u);
   EXPECT_GT(b.handed[1], 0u);
   EXPECT_LT(b.handed[1], b.timed_calls * uint64_t(b.x.size()));
+  // Thread 0 finishes block 1's head within its sweep time; thread 1 has no block after it.
+  ASSERT_EQ(b.head.size(), 2u);
+  EXPECT_GT(b.head[0], 0.0);
+  EXPECT_LT(b.head[0], b.busy[0]);
+  EXPECT_EQ(b.head[1], 0.0);
   std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
               (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
 }
