@@ -216,7 +216,7 @@ struct PairSlots {
   uint32_t epoch = 0;  ///< force calls made through this PairSlots, the last one's number (wraps)
   uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
   /// Since the slots were made, for the run's summary (summary.json's thread_sweep): force
-  /// calls timed on several threads (rebalance()), and per thread the seconds of its sweeps
+  /// calls timed on several threads (thread 0's measured()), and per thread the seconds of its sweeps
   /// (measured(): its block and the head it finished for the thread after it, waits left
   /// out) and the particles of its block it handed to the thread before (hand_over()).
   uint64_t timed_calls = 0;
@@ -337,6 +337,7 @@ struct PairSlots {
   /// Thread t swept its block in `seconds` (called by that thread in the kernel).
   /// head: of those seconds, the ones spent finishing the head of block t + 1.
   void measured(long t, double seconds, double head = 0.0) {
+    if (t == 0) ++timed_calls;  // thread 0 alone writes it
     busy[size_t(t)] += seconds;
     busy_total[size_t(t)] += seconds;
     head_total[size_t(t)] += head;
@@ -348,7 +349,6 @@ struct PairSlots {
   /// boundary moves, and halving damps the overshoot), none below kMinShare of an equal
   /// share. The split is redone only when a share moves by more than 0.2 % of the total work.
   void rebalance() {
-    ++timed_calls;
     if (++calls < kRebalanceCalls) return;
     calls = 0;
     const size_t nt = share.size();
