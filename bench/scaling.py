@@ -32,8 +32,10 @@ one-thread medians (on equal cores, the usual speed-up) and over the fastest cor
 efficiency, the two-thread median over the sum of the cores' one-thread medians.
 
 Where two threads' time goes (a table after the first, from each run's summary.json
-`thread_sweep`): the one- and two-thread steps, each thread's sweep of its block per force
-call (waits left out), both sweeps over the one-thread step (above 1: work the split adds,
+`thread_sweep`): the one- and two-thread steps, each thread's sweep of its block per step
+(waits left out; its time per force call times the calls over the steps, so that a call
+that takes two steps in one sweep, as the 10^6 gas's do, counts as two), both sweeps over
+the one-thread step (above 1: work the split adds,
 such as the particles finished across the block boundary; below 1: each core's own cache),
 the two-thread step beyond the longer sweep (the list builds, waits and joins), and the time
 the threads spend finishing the particles handed across the block boundaries.
@@ -149,11 +151,13 @@ def main():
                 k = (key, t)
                 allr.setdefault(k, []).append(rate)
                 # The step loop's time a step, and on several threads where it went
-                # (summary.json's thread_sweep: each thread's sweep per force call).
+                # (summary.json's thread_sweep: each thread's sweep per force call, here per
+                # step: a call that takes two steps in one sweep counts as two).
                 ts = j.get("thread_sweep")
+                per_step = ts["force_calls"] / max(1, j["steps"]) if ts else 1.0
                 steps.setdefault(k, []).append(
                     {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
-                     "sweep_us": ts["sweep_us_per_call"] if ts else None,
+                     "sweep_us": [u * per_step for u in ts["sweep_us_per_call"]] if ts else None,
                      "head_us": sum(ts.get("head_us_per_call", [])) if ts else None,
                      "handed": sum(ts["handed_over_per_call"]) if ts else None})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
@@ -229,7 +233,7 @@ def main():
                         row["ceiling_mean_core"] = statistics.median(pair[key]) / mean
     if 1 in threads and any(x["sweep_us"] for v in steps.values() for x in v):
         print(f"\nwhere the two threads' time goes (medians of {a.repeat} runs; a sweep: one thread's block and "
-              "the head it finishes for the next, per force call, waits left out)")
+              "the head it finishes for the next, per step, waits left out)")
         print("| particles | 1 thread: a step (us) | 2 threads: a step (us) | a thread's sweep (us, mean) | "
               "sweeps / 1-thread step | step - longest sweep (us) | particles handed over a call | "
               "finishing them (us a call) |")
