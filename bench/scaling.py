@@ -35,8 +35,8 @@ Where two threads' time goes (a table after the first, from each run's summary.j
 `thread_sweep`): the one- and two-thread steps, each thread's sweep of its block per step
 (waits left out; its time per force call times the calls over the steps, so that a call
 that takes two steps in one sweep, as the 10^6 gas's do, counts as two), both sweeps over
-the one-thread step (above 1: work the split adds,
-such as the particles finished across the block boundary; below 1: each core's own cache),
+the one-thread step (above 1: work the split adds, such as the particles finished across
+the block boundary; below 1: each core's own cache),
 the two-thread step beyond the longer sweep (the list builds, waits and joins), and the time
 the threads spend finishing the particles handed across the block boundaries.
 
