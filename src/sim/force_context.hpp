@@ -2,8 +2,10 @@
 #pragma once
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -279,6 +281,48 @@ struct PairSlots {
     for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k) w += 1 + kWorkContact * nl.hist.live[k];
     return w;
   }
+  /// prefix[i] = the work of particles [0, i), work_of summed, and span. Without a loop over
+  /// each row's entries: the work before row i is kWorkParticle i, one per entry before its
+  /// first (start[i]) and kWorkContact per live contact before it, and the live flags
+  /// before an entry are counted eight at a time (the sums of whole words, then the word
+  /// that holds the entry, masked). A loop per row (0 to 8 entries, 3.5 on the chute)
+  /// mispredicted its end on most rows: 0.37 ms per list build on the chute, set-up that
+  /// runs on one thread while the others wait.
+  void work_prefix(const NeighborList& nl, long n_) {
+    prefix.assign(size_t(n_ + 1), 0);
+    span = 0;
+    for (long i = 0; i < n_; ++i) span = std::max(span, i - long(nl.dep_lo[size_t(i)]));
+    const uint32_t* const start = nl.start.data();
+    if constexpr (std::endian::native != std::endian::little) {
+      for (long i = 0; i < n_; ++i) prefix[size_t(i + 1)] = prefix[size_t(i)] + work_of(nl, i);
+      return;
+    }
+    const uint8_t* const live = nl.hist.live.data();
+    const size_t nlive = nl.hist.live.size(), words = (size_t(start[n_]) + 7) / 8 + 1;
+    // The flags of entries 8w .. 8w + 7 as one word (little-endian: entry 8w + b in byte b),
+    // zero past the end. A flag is 0 or 1, so a word's bytes sum to at most 8 and the
+    // multiply adds them without a carry between bytes.
+    auto word = [&](const size_t w) {
+      uint64_t x = 0;
+      const size_t at = 8 * w;
+      if (at + 8 <= nlive)
+        std::memcpy(&x, live + at, 8);
+      else if (at < nlive)
+        std::memcpy(&x, live + at, nlive - at);
+      return x;
+    };
+    auto bytes = [](const uint64_t x) { return (x * 0x0101010101010101ull) >> 56; };
+    std::vector<uint32_t> before(words);  // live flags of entries [0, 8w)
+    for (size_t w = 0; w + 1 < words; ++w) before[w + 1] = before[w] + uint32_t(bytes(word(w)));
+    auto live_before = [&](const uint32_t k) {
+      const size_t w = k / 8;
+      const uint64_t mask = (uint64_t(1) << (8 * (k % 8))) - 1;  // the word's first k % 8 bytes
+      return uint64_t(before[w]) + bytes(word(w) & mask);
+    };
+    const uint64_t live0 = live_before(start[0]);
+    for (long i = 1; i <= n_; ++i)
+      prefix[size_t(i)] = kWorkParticle * uint64_t(i) + (start[i] - start[0]) + kWorkContact * (live_before(start[i]) - live0);
+  }
   /// Splits n particles into nt contiguous blocks, block t holding about share[t] of the
   /// total work (work_of; equal shares until measured). Which thread sweeps which particle
   /// never changes what is summed or in which order (force_kernel.hpp), so results do not
@@ -305,12 +349,7 @@ struct PairSlots {
     n = n_;
     np = nl.pair_count();
     if (new_list || prefix.size() != size_t(n + 1)) {
-      prefix.assign(size_t(n + 1), 0);
-      span = 0;
-      for (long i = 0; i < n; ++i) {
-        prefix[size_t(i + 1)] = prefix[size_t(i)] + work_of(nl, i);
-        span = std::max(span, i - long(nl.dep_lo[size_t(i)]));
-      }
+      work_prefix(nl, n);
       map_all = true;
     }
     // Block t ends at the first particle where the work before it reaches the shares of

@@ -481,7 +481,7 @@ TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
 
 // The force loop's blocks (PairSlots::plan) hold about equal work, not equal counts: with
 // each particle's work (PairSlots::work_of: per particle, per list entry, per live contact),
-// each block's work is within one particle's work of total/nt (the split is made between particles), the
+// the split's running sums equal work_of's; each block's work is within one particle's work of total/nt (the split is made between particles), the
 // blocks are contiguous and cover every particle once. In the settling box the rows differ
 // in length and contacts, so a split into equal counts fails this (checked).
 TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
@@ -499,6 +499,16 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
   for (long nt : {2L, 3L, 4L}) {
     PairSlots ps;
     ps.plan(nl, n, nt);
+    // The split's work sums (counted from the live flags a word at a time) are work_of's.
+    ASSERT_EQ(ps.prefix.size(), size_t(n + 1));
+    uint64_t sum = 0;
+    size_t off = 0;
+    for (long i = 0; i < n; ++i) {
+      off += ps.prefix[size_t(i)] != sum;
+      sum += w[size_t(i)];
+    }
+    EXPECT_EQ(off, 0u);
+    EXPECT_EQ(ps.prefix[size_t(n)], total);
     ASSERT_EQ(ps.bound.size(), size_t(nt + 1));
     EXPECT_EQ(ps.bound.front(), 0);
     EXPECT_EQ(ps.bound.back(), n);
