@@ -492,7 +492,9 @@ int run_case(Case c, const RunOptions& opt) {
       j["thread_sweep"] = {{"force_calls", ts.timed_calls},
                            {"sweep_us_per_call", sweep},
                            {"head_us_per_call", head},  // of the sweep: the next block's head finished
-                           {"handed_over_per_call", handed}};  // a step's time: loop_time_s / steps
+                           {"handed_over_per_call", handed},  // a step's time: loop_time_s / steps
+                           {"rebalances", ts.rebalances},  // splits moved by the measured times
+                           {"shares", ts.share}};  // each block's share of the modelled work at the end
     }
   }
   j["screening"] = screen_avx2_enabled() ? "avx2" : "scalar";  // the force loop's list screening (results identical)

@@ -87,7 +87,7 @@ using DeferList = std::vector<uint32_t, NoFillAllocator<uint32_t>>;
 /// The work model is rough (its weights are costs on one machine and one problem; wall
 /// contacts are not in it, and a core shared with other work is slower), so the split is
 /// corrected by measurement: the kernel times each thread's sweep of its block (measured()),
-/// and every kRebalanceCalls calls the blocks' shares of the modelled work are set so that
+/// and every kRebalanceCalls calls (sooner after a new thread count) the blocks' shares of the modelled work are set so that
 /// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
 /// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
 /// results bit-identical; it only moves where the threads meet.
@@ -100,6 +100,13 @@ struct PairSlots {
   /// Force calls between rebalances: enough sweeps that the sums of their times are not
   /// ruled by one interrupted step, few enough to follow a flow whose dense region moves.
   static constexpr uint32_t kRebalanceCalls = 32;
+  /// The first rebalances after a new thread count come sooner, after kFirstRebalanceCalls
+  /// calls, then twice as many, up to kRebalanceCalls, and move the shares all the way to
+  /// their aim: the work model's first split can be far off (the 10^4 gas's first block,
+  /// which holds the floor's wall contacts and finishes the next block's head, took 1.6x
+  /// as long as the second; the shares settle near 1/3 : 2/3), and moving halfway every 32
+  /// calls took about 200 calls to get there.
+  static constexpr uint32_t kFirstRebalanceCalls = 8;
   /// The smallest share a block is given, as a fraction of an equal share.
   static constexpr double kMinShare = 0.25;
   std::vector<long> bound;   ///< thread t sweeps particles [bound[t], bound[t + 1])
@@ -121,6 +128,7 @@ struct PairSlots {
   std::vector<double> busy;
   std::vector<double> swept;
   uint32_t calls = 0;      ///< force calls timed since the last rebalance
+  uint32_t period = kFirstRebalanceCalls;  ///< calls between this rebalance and the last
   bool stale = false;      ///< the shares changed: plan() splits again at its next call
   uint64_t rebalances = 0; ///< splits moved by measurement (for tests and diagnostics)
   /// Per list build: the modelled work of particles [0, i) (n + 1 entries), and the widest
@@ -336,6 +344,7 @@ struct PairSlots {
       busy.assign(size_t(nt), 0.0);
       swept.assign(size_t(nt), 0.0);
       calls = 0;
+      period = kFirstRebalanceCalls;
       if (busy_total.size() < size_t(nt)) {
         busy_total.resize(size_t(nt), 0.0);
         handed_total.resize(size_t(nt), 0);
@@ -382,14 +391,17 @@ struct PairSlots {
     head_total[size_t(t)] += head;
     swept[size_t(t)] += double(block_work(t));
   }
-  /// After a force call whose threads each called measured(): every kRebalanceCalls calls,
-  /// each thread's time per unit of modelled work sets the new shares (share ~ 1 / time per
-  /// unit), moved halfway from the old ones (the time per unit of a block changes as its
-  /// boundary moves, and halving damps the overshoot), none below kMinShare of an equal
-  /// share. The split is redone only when a share moves by more than 0.2 % of the total work.
+  /// After a force call whose threads each called measured(): every `period` calls (8, 16,
+  /// then kRebalanceCalls), each thread's time per unit of modelled work sets the new shares
+  /// (share ~ 1 / time per unit), moved all the way in the first two rebalances and halfway
+  /// from the old ones after them (the time per unit of a block changes as its boundary
+  /// moves, and halving damps the overshoot), none below kMinShare of an equal share. The
+  /// split is redone only when a share moves by more than 0.2 % of the total work.
   void rebalance() {
-    if (++calls < kRebalanceCalls) return;
+    if (++calls < period) return;
     calls = 0;
+    const bool early = period < kRebalanceCalls;  // one of the first rebalances: a full move
+    period = std::min(2 * period, kRebalanceCalls);
     const size_t nt = share.size();
     std::vector<double> inv(nt, 0.0);
     double inv_sum = 0;
@@ -402,15 +414,15 @@ struct PairSlots {
     std::fill(busy.begin(), busy.end(), 0.0);
     std::fill(swept.begin(), swept.end(), 0.0);
     if (!timed) return;
-    // Halfway to the aim, and at least a quarter of an equal share: a thread that was held
-    // up for a while (its core taken by other work) keeps a block to time, so its share can
-    // come back when it is fast again.
-    // (The halfway shares sum to 1; those below the floor are raised to it and the others
+    // Halfway to the aim (early: the aim), and at least a quarter of an equal share: a
+    // thread that was held up for a while (its core taken by other work) keeps a block to
+    // time, so its share can come back when it is fast again.
+    // (The new shares sum to 1; those below the floor are raised to it and the others
     // scaled down to leave the sum at 1.)
     const double floor = kMinShare / double(nt);
     double low = 0, rest = 0;
     for (size_t t = 0; t < nt; ++t) {
-      inv[t] = 0.5 * (share[t] + inv[t] / inv_sum);
+      inv[t] = early ? inv[t] / inv_sum : 0.5 * (share[t] + inv[t] / inv_sum);
       if (inv[t] < floor) low += floor; else rest += inv[t];
     }
     double moved = 0;

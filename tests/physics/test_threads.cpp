@@ -523,10 +523,10 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
 }
 
 // The split follows measured sweep times (PairSlots::rebalance): a thread that took twice
-// as long per unit of modelled work gets a smaller share, moved halfway from the old one:
-// shares 1/2, 1/2 with times per unit 2 : 1 aim at 1/3, 2/3 and become 5/12, 7/12 (to
-// rounding: a few ulps of the divisions). Below kRebalanceCalls calls nothing moves; shares
-// that already aim where they are keep the split.
+// as long per unit of modelled work gets a smaller share. The first two rebalances (after
+// 8 and 16 more calls) move the shares to their aim, the later ones (every kRebalanceCalls
+// calls) halfway; between them nothing moves, and shares that already aim where they are
+// keep the split.
 // The hand-offs of the barrier-free force loop are matched by the call's number: never 0
 // (what a fresh record holds), and at the wrap of the 32-bit counter every record is
 // cleared, so that a record left from 2^32 calls ago cannot pass for the current call's.
@@ -547,32 +547,54 @@ TEST(Threads, HandOffNumbersNeverMatchAStaleRecord) {
 TEST(Threads, RebalanceMovesWorkToTheFasterThread) {
   auto s = make_box(1, false);
   s->run(50);
+  const long n = long(s->particles.size());
   PairSlots ps;
-  ps.plan(s->nl, long(s->particles.size()), 2);
+  ps.plan(s->nl, n, 2);
   ASSERT_EQ(ps.share.size(), 2u);
-  for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
-    ps.busy = {2.0 * double(ps.block_work(0)), 1.0 * double(ps.block_work(1))};  // seconds per unit: 2 and 1
-    ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
-    EXPECT_FALSE(ps.stale);
-    ps.rebalance();
-  }
+  // `calls` force calls timed at u0 and u1 seconds per unit of modelled work
+  auto feed = [&](const uint32_t calls, const double u0, const double u1) {
+    for (uint32_t c = 0; c < calls; ++c) {
+      ps.busy = {u0 * double(ps.block_work(0)), u1 * double(ps.block_work(1))};
+      ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
+      ps.rebalance();
+    }
+  };
+  // The first rebalance comes after kFirstRebalanceCalls calls and moves all the way: times
+  // per unit 2 : 1 aim at 1/3 : 2/3.
+  feed(PairSlots::kFirstRebalanceCalls - 1, 2.0, 1.0);
+  EXPECT_FALSE(ps.stale);
+  EXPECT_EQ(ps.rebalances, 0u);
+  feed(1, 2.0, 1.0);
   EXPECT_TRUE(ps.stale);
   EXPECT_EQ(ps.rebalances, 1u);
-  EXPECT_NEAR(ps.share[0], 5.0 / 12.0, 1e-15);
-  EXPECT_NEAR(ps.share[1], 7.0 / 12.0, 1e-15);
+  EXPECT_NEAR(ps.share[0], 1.0 / 3.0, 1e-15);
+  EXPECT_NEAR(ps.share[1], 2.0 / 3.0, 1e-15);
   const long b_old = ps.bound[1];
-  ps.plan(s->nl, long(s->particles.size()), 2);
+  ps.plan(s->nl, n, 2);
   EXPECT_FALSE(ps.stale);
   EXPECT_LT(ps.bound[1], b_old);  // block 0 shrank
   const double total = double(ps.prefix.back());
-  EXPECT_NEAR(double(ps.block_work(0)) / total, 5.0 / 12.0, 0.05);  // a split between particles: one holds < 1 % of the work
-  // times per unit in proportion to 1/share: the shares aim where they are and stay put
-  for (uint32_t c = 0; c < PairSlots::kRebalanceCalls; ++c) {
+  EXPECT_NEAR(double(ps.block_work(0)) / total, 1.0 / 3.0, 0.05);  // a split between particles: one holds < 1 % of the work
+  // The second, twice as many calls later: times per unit in proportion to 1/share aim
+  // where the shares are, and they stay put.
+  for (uint32_t c = 0; c < 2 * PairSlots::kFirstRebalanceCalls; ++c) {
     ps.busy = {double(ps.block_work(0)) / ps.share[0], double(ps.block_work(1)) / ps.share[1]};
     ps.swept = {double(ps.block_work(0)), double(ps.block_work(1))};
     ps.rebalance();
   }
+  EXPECT_FALSE(ps.stale);
   EXPECT_EQ(ps.rebalances, 1u);
+  // From then on every kRebalanceCalls calls, halfway: equal times per unit aim at 1/2 : 1/2,
+  // and the shares move from 1/3 : 2/3 to 5/12 : 7/12 (to rounding: a few ulps of the
+  // divisions).
+  feed(PairSlots::kRebalanceCalls - 1, 1.0, 1.0);
+  EXPECT_FALSE(ps.stale);
+  feed(1, 1.0, 1.0);
+  EXPECT_TRUE(ps.stale);
+  EXPECT_EQ(ps.rebalances, 2u);
+  EXPECT_NEAR(ps.share[0], 5.0 / 12.0, 1e-15);
+  EXPECT_NEAR(ps.share[1], 7.0 / 12.0, 1e-15);
+  ps.plan(s->nl, n, 2);
   // a thread held up (1000x slower per unit, for many rebalances) keeps a quarter of an
   // equal share, so its block is never empty and is timed again
   for (int r = 0; r < 40; ++r)
