@@ -87,8 +87,9 @@ using DeferList = std::vector<uint32_t, NoFillAllocator<uint32_t>>;
 /// The work model is rough (its weights are costs on one machine and one problem; wall
 /// contacts are not in it, and a core shared with other work is slower), so the split is
 /// corrected by measurement: the kernel times each thread's sweep of its block (measured()),
-/// and every kRebalanceCalls calls (sooner after a new thread count) the blocks' shares of the modelled work are set so that
-/// every thread is predicted to take the same time (rebalance()). Which thread sweeps which
+/// and every kRebalanceCalls calls (sooner after a new thread count) the blocks' shares of
+/// the modelled work are set so that every thread is predicted to take the same time
+/// (rebalance()). Which thread sweeps which
 /// particle never changes a result (force_kernel.hpp), so the timing-driven split leaves
 /// results bit-identical; it only moves where the threads meet.
 struct PairSlots {
@@ -102,10 +103,10 @@ struct PairSlots {
   static constexpr uint32_t kRebalanceCalls = 32;
   /// The first rebalances after a new thread count come sooner, after kFirstRebalanceCalls
   /// calls, then twice as many, up to kRebalanceCalls, and move the shares all the way to
-  /// their aim: the work model's first split can be far off (the 10^4 gas's first block,
-  /// which holds the floor's wall contacts and finishes the next block's head, took 1.6x
-  /// as long as the second; the shares settle near 1/3 : 2/3), and moving halfway every 32
-  /// calls took about 200 calls to get there.
+  /// their aim: the work model's equal first split can be far off (on the development VM
+  /// one block took 1.3-1.6x as long as the other in the first calls of the 10^4 and 10^6
+  /// gases and the chute; where the shares settle moves with the two cores' speeds), and
+  /// moving halfway every 32 calls took 160-190 calls to settle.
   static constexpr uint32_t kFirstRebalanceCalls = 8;
   /// The smallest share a block is given, as a fraction of an equal share.
   static constexpr double kMinShare = 0.25;
@@ -128,7 +129,7 @@ struct PairSlots {
   std::vector<double> busy;
   std::vector<double> swept;
   uint32_t calls = 0;      ///< force calls timed since the last rebalance
-  uint32_t period = kFirstRebalanceCalls;  ///< calls between this rebalance and the last
+  uint32_t period = kFirstRebalanceCalls;  ///< calls from the last rebalance to the next
   bool stale = false;      ///< the shares changed: plan() splits again at its next call
   uint64_t rebalances = 0; ///< splits moved by measurement (for tests and diagnostics)
   /// Per list build: the modelled work of particles [0, i) (n + 1 entries), and the widest

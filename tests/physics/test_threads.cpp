@@ -481,8 +481,9 @@ TEST(Threads, RowsLongerThanABatchSumEveryEntryOnce) {
 
 // The force loop's blocks (PairSlots::plan) hold about equal work, not equal counts: with
 // each particle's work (PairSlots::work_of: per particle, per list entry, per live contact),
-// the split's running sums equal work_of's; each block's work is within one particle's work of total/nt (the split is made between particles), the
-// blocks are contiguous and cover every particle once. In the settling box the rows differ
+// the split's running sums equal work_of's, each block's work is within one particle's work
+// of total/nt (the split is made between particles), and the blocks are contiguous and
+// cover every particle once. In the settling box the rows differ
 // in length and contacts, so a split into equal counts fails this (checked).
 TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
   auto s = make_box(1, false);
