@@ -37,8 +37,12 @@ Where two threads' time goes (a table after the first, from each run's summary.j
 that takes two steps in one sweep, as the 10^6 gas's do, counts as two), both sweeps over
 the one-thread step (above 1: work the split adds, such as the particles finished across
 the block boundary; below 1: each core's own cache),
-the two-thread step beyond the longer sweep (the list builds, waits and joins), and the time
-the threads spend finishing the particles handed across the block boundaries.
+the two-thread step beyond the longest sweep, call by call (the list builds, the serial parts,
+the fork and the join), the imbalance (the longest sweep of a call less the sweep had that
+call's work been split so that both threads ended together, each at the rate it swept at in
+that call: what the join waits for, which no split made from earlier calls can fully
+recover), and the time the threads spend finishing the particles handed across the block
+boundaries.
 
 --lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
 once per repeat, with bench/peers/in.packing on the same data file and for the same number of
@@ -159,6 +163,12 @@ def main():
                     {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
                      "sweep_us": [u * per_step for u in ts["sweep_us_per_call"]] if ts else None,
                      "head_us": sum(ts.get("head_us_per_call", [])) if ts else None,
+                     # call by call: the longest sweep, and the sweep had the call's work been
+                     # split to end together (None from an engine without these counters)
+                     "longest_us": ts["longest_sweep_us_per_call"] * per_step
+                     if ts and "longest_sweep_us_per_call" in ts else None,
+                     "balanced_us": ts["balanced_sweep_us_per_call"] * per_step
+                     if ts and "balanced_sweep_us_per_call" in ts else None,
                      "handed": sum(ts["handed_over_per_call"]) if ts else None})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
@@ -235,9 +245,9 @@ def main():
         print(f"\nwhere the two threads' time goes (medians of {a.repeat} runs; a sweep: one thread's block and "
               "the head it finishes for the next, per step, waits left out)")
         print("| particles | 1 thread: a step (us) | 2 threads: a step (us) | a thread's sweep (us, mean) | "
-              "sweeps / 1-thread step | step - longest sweep (us) | particles handed over a call | "
+              "sweeps / 1-thread step | step - longest sweep (us) | imbalance (us) | particles handed over a call | "
               "finishing them (us a call) |")
-        print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for key, label, _ in probs:
             two = [x for x in steps.get((key, 2), []) if x["sweep_us"]]
             one = steps.get((key, 1), [])
@@ -247,17 +257,25 @@ def main():
             two_us = statistics.median(x["loop_us"] for x in two)
             mean_sweep = statistics.median(sum(x["sweep_us"]) / len(x["sweep_us"]) for x in two)
             work = statistics.median(sum(x["sweep_us"]) / one_us for x in two)
-            rest = statistics.median(x["loop_us"] - max(x["sweep_us"]) for x in two)
+            # The longest sweep call by call where the engine counts it (else the longer of
+            # the threads' mean sweeps, which leaves the calls' imbalance in the step's rest).
+            longest = [x["longest_us"] if x["longest_us"] is not None else max(x["sweep_us"]) for x in two]
+            rest = statistics.median(x["loop_us"] - l for x, l in zip(two, longest))
+            imb = [x["longest_us"] - x["balanced_us"] for x in two if x["longest_us"] is not None]
+            imbalance = statistics.median(imb) if imb else None
             handed = statistics.median(x["handed"] for x in two)
             head = statistics.median(x["head_us"] or 0.0 for x in two)
-            print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {handed:.0f} | "
-                  f"{head:.1f} |")
+            imb_s = f"{imbalance:.1f}" if imbalance is not None else "-"
+            print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {imb_s} | "
+                  f"{handed:.0f} | {head:.1f} |")
             for row in rows:
                 if row["problem"] == label and row["threads"] == 2:
                     row["step_us_one_thread"], row["step_us"] = one_us, two_us
                     row["sweep_us_mean"], row["sweeps_over_one_thread_step"] = mean_sweep, work
                     row["step_minus_longest_sweep_us"], row["handed_over_per_call"] = rest, handed
                     row["head_us"] = head
+                    if imbalance is not None:
+                        row["imbalance_us"] = imbalance
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
     ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):

@@ -111,7 +111,7 @@ def scaling(a, out):
         # reach here), each over the mean of the cores' one-thread medians.
         speed[label] = {k: two[k] for k in ("one_thread_per_core", "speedup_mean_core", "ceiling_mean_core")}
         # Where the two threads' time went (summary.json's thread_sweep, through scaling.py).
-        for k in ("sweeps_over_one_thread_step", "step_minus_longest_sweep_us", "handed_over_per_call"):
+        for k in ("sweeps_over_one_thread_step", "step_minus_longest_sweep_us", "imbalance_us", "handed_over_per_call"):
             if k in two:
                 speed[label][k] = two[k]
         speed[label]["speedup_unpinned"] = two["median_particle_steps_per_s"] / one["median_particle_steps_per_s"]
@@ -200,10 +200,11 @@ def table(got):
         # gas below parallel_min runs it on one): both threads' sweeps over the one-thread
         # step (the work the split adds), and the step beyond the longer sweep (waits, joins).
         parts = [f"{k} {v['sweeps_over_one_thread_step']:.2f}x, {v['step_minus_longest_sweep_us']:.0f} us"
+                 + (f", {v['imbalance_us']:.0f} us" if "imbalance_us" in v else "")
                  for k, v in sp.items() if "sweeps_over_one_thread_step" in v]
         if parts:
-            meas += ("; the two threads' sweeps over the one-thread step, and a step beyond the longer sweep: " +
-                     "; ".join(parts))
+            meas += ("; the two threads' sweeps over the one-thread step, a step beyond the longest sweep"
+                     " and the calls' imbalance: " + "; ".join(parts))
         ok = ident and all(v["speedup_mean_core"] >= 1.8 for v in sp.values())
         status = verdict(ok)
         if not ok:

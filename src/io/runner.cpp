@@ -493,6 +493,10 @@ int run_case(Case c, const RunOptions& opt) {
                            {"sweep_us_per_call", sweep},
                            {"head_us_per_call", head},  // of the sweep: the next block's head finished
                            {"handed_over_per_call", handed},  // a step's time: loop_time_s / steps
+                           // the mean over the calls of the longest sweep, and of the sweep
+                           // had each call's work been split to end together (PairSlots)
+                           {"longest_sweep_us_per_call", 1e6 * ts.longest_total / calls},
+                           {"balanced_sweep_us_per_call", 1e6 * ts.balanced_total / calls},
                            {"rebalances", ts.rebalances},  // splits moved by the measured times
                            {"shares", ts.share}};  // each block's share of the modelled work at the end
     }

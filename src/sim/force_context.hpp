@@ -236,6 +236,16 @@ struct PairSlots {
   /// Per thread, of busy_total: the seconds it spent finishing the head handed over by the
   /// thread after it (the particles that depend on both blocks).
   std::vector<double> head_total;
+  /// Per thread: the seconds of its sweep in the last force call (measured()).
+  std::vector<double> last;
+  /// Since the slots were made, per timed call on several threads, summed: the longest of the
+  /// threads' sweeps (the call's sweeps end at the join, waits left out), and the sweep every
+  /// thread would have taken had the call's work been split so that all ended together, each
+  /// at the rate it swept at in that call (the blocks' modelled work over the sum of the
+  /// threads' rates, block_work(t) / last[t]). longest_total - balanced_total is what the
+  /// split's imbalance cost, call by call; a split made before the call, from the times of
+  /// earlier calls, can only recover part of it (the cores' speeds move from call to call).
+  double longest_total = 0, balanced_total = 0;
   /// Numbers a new force call and makes sure there is a hand-off record per thread (set-up,
   /// before the parallel region).
   /// At the wrap the records are cleared, so that no record keeps a number that a later
@@ -350,6 +360,7 @@ struct PairSlots {
         busy_total.resize(size_t(nt), 0.0);
         handed_total.resize(size_t(nt), 0);
         head_total.resize(size_t(nt), 0.0);
+        last.resize(size_t(nt), 0.0);
       }
     }
     stale = false;
@@ -390,7 +401,24 @@ struct PairSlots {
     busy[size_t(t)] += seconds;
     busy_total[size_t(t)] += seconds;
     head_total[size_t(t)] += head;
+    last[size_t(t)] = seconds;
     swept[size_t(t)] += double(block_work(t));
+  }
+  /// After a force call whose threads each called measured(): its longest sweep and its
+  /// balanced one into longest_total and balanced_total (a block without work or a sweep
+  /// without time counts the call as balanced).
+  void account_call() {
+    double longest = 0, rate = 0, work = 0;
+    bool timed = true;
+    for (size_t t = 0; t < share.size(); ++t) {
+      const double w = double(block_work(long(t))), sec = last[t];
+      longest = std::max(longest, sec);
+      timed = timed && w > 0 && sec > 0;
+      if (timed) rate += w / sec;
+      work += w;
+    }
+    longest_total += longest;
+    balanced_total += timed ? work / rate : longest;
   }
   /// After a force call whose threads each called measured(): every `period` calls (8, 16,
   /// then kRebalanceCalls), each thread's time per unit of modelled work sets the new shares
@@ -399,6 +427,7 @@ struct PairSlots {
   /// moves, and halving damps the overshoot), none below kMinShare of an equal share. The
   /// split is redone only when a share moves by more than 0.2 % of the total work.
   void rebalance() {
+    account_call();
     if (++calls < period) return;
     calls = 0;
     const bool early = period < kRebalanceCalls;  // one of the first rebalances: a full move

@@ -29,6 +29,7 @@ struct State {
   std::vector<double> busy;    ///< per thread, seconds of its sweeps
   std::vector<uint64_t> handed;  ///< per thread, particles it handed to the thread before
   std::vector<double> head;      ///< per thread, seconds of its sweeps finishing the next block's head
+  double longest = 0, balanced = 0;  ///< summed over the calls: the longest sweep, the balanced one
 };
 
 // 300 spheres in a box open at the top (Hertz-Mindlin with EPSD rolling), prepared to run:
@@ -91,6 +92,8 @@ State run(int threads, bool record = false, bool column = false) {
   st.busy = s->thread_split().busy_total;
   st.handed = s->thread_split().handed_total;
   st.head = s->thread_split().head_total;
+  st.longest = s->thread_split().longest_total;
+  st.balanced = s->thread_split().balanced_total;
   return st;
 }
 
@@ -182,6 +185,15 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   EXPECT_GT(b.head[0], 0.0);
   EXPECT_LT(b.head[0], b.busy[0]);
   EXPECT_EQ(b.head[1], 0.0);
+  // Call by call the longest sweep is at least each thread's and at most their sum, and the
+  // balanced sweep (the call's work over the sum of the threads' rates) is at most the
+  // longest, so the totals keep the same order; none are kept on one thread.
+  EXPECT_EQ(a.longest, 0.0);
+  EXPECT_GE(b.longest, std::max(b.busy[0], b.busy[1]));
+  EXPECT_LE(b.longest, b.busy[0] + b.busy[1]);
+  EXPECT_GT(b.balanced, 0.0);
+  EXPECT_LE(b.balanced, b.longest);
+  std::printf("[info] column: longest sweeps %.3f s, balanced %.3f s\n", b.longest, b.balanced);
   std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
               (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
 }
