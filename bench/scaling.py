@@ -44,6 +44,16 @@ that call: what the join waits for, which no split made from earlier calls can f
 recover), and the time the threads spend finishing the particles handed across the block
 boundaries.
 
+--serial-blocks also runs each problem, in every repeat, with the two threads' blocks swept
+one after another on one thread (COHDEM_SERIAL_BLOCKS=1: the split and the hand-off across
+the block boundary as on two threads, the same results, but no second core; step pairs off).
+The table of where the time goes then adds the blocks' sweeps in series over the one-thread
+step (the work the split itself adds: the particles finished across the boundary, the
+locality tests) and the two threads' sweeps over those in series (what the second core adds:
+lines moved between the cores' caches, a slower core), for the problems whose one- and
+two-thread runs took plain steps (no step pairs: at 10^5 and 10^6 particles they take them,
+and the comparison would not be like for like).
+
 --lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
 once per repeat, with bench/peers/in.packing on the same data file and for the same number of
 steps: what the best-known peer's cost per particle-step does from size to size on this
@@ -80,6 +90,8 @@ def main():
                     help="also run two independent one-thread runs at once: what two cores give here")
     ap.add_argument("--per-core", action="store_true",
                     help="also run one thread pinned to each core: speed-ups over the mean and the fastest core")
+    ap.add_argument("--serial-blocks", action="store_true",
+                    help="also run the two threads' blocks one after another on one thread (COHDEM_SERIAL_BLOCKS=1)")
     ap.add_argument("--lammps", action="store_true",
                     help="also run LAMMPS (lmp, one rank) on every size of the gas, once per repeat")
     ap.add_argument("--chute-data", default=os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute"))
@@ -143,7 +155,7 @@ def main():
         where = f" on core {cpu}" if cpu is not None else ""
         print(f"  run {r + 1}: {label:>16s}, LAMMPS{where}: {rate:10.4g} particle-steps/s (cohdem {ours:.4g})", flush=True)
 
-    best, allr, pair, steps = {}, {}, {}, {}
+    best, allr, pair, steps, serial = {}, {}, {}, {}, {}
     for r in range(a.repeat):
         for key, label, case in probs:
             for t in threads:
@@ -169,7 +181,8 @@ def main():
                      if ts and "longest_sweep_us_per_call" in ts else None,
                      "balanced_us": ts["balanced_sweep_us_per_call"] * per_step
                      if ts and "balanced_sweep_us_per_call" in ts else None,
-                     "handed": sum(ts["handed_over_per_call"]) if ts else None})
+                     "handed": sum(ts["handed_over_per_call"]) if ts else None,
+                     "step_pairs": (j.get("step_pairs") or {}).get("pairs", 0)})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
             for cpu in cores:
@@ -179,6 +192,20 @@ def main():
                 rate = summary(out)["particle_steps_per_s"]
                 allr.setdefault((key, f"core{cpu}"), []).append(rate)
                 print(f"  run {r + 1}: {label:>16s}, 1 thread on core {cpu}: {rate:10.4g} particle-steps/s", flush=True)
+            # (not where this repeat's one-thread run took step pairs: no like-for-like step)
+            if a.serial_blocks and 2 in threads and not (steps.get((key, 1)) or [{}])[-1].get("step_pairs"):
+                out = os.path.join(a.out, f"run_{key}_serial")
+                subprocess.run(cmd(case, 2, out), check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               env=dict(os.environ, COHDEM_SERIAL_BLOCKS="1"))
+                j = summary(out)
+                ts = j.get("thread_sweep")
+                if ts and ts.get("serial_calls"):
+                    serial.setdefault(key, []).append(
+                        {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
+                         "sweeps_us": sum(ts["sweep_us_per_call"]) * ts["force_calls"] / max(1, j["steps"]),
+                         "serial_calls": ts["serial_calls"], "force_calls": ts["force_calls"]})
+                    print(f"  run {r + 1}: {label:>16s}, 2 blocks in series: {j['particle_steps_per_s']:10.4g} "
+                          f"particle-steps/s, blocks' sweeps {serial[key][-1]['sweeps_us']:.1f} us a step", flush=True)
             if a.lammps and key != "chute":
                 lammps_run(key, label, r)
             if a.ceiling:
@@ -246,8 +273,9 @@ def main():
               "the head it finishes for the next, per step, waits left out)")
         print("| particles | 1 thread: a step (us) | 2 threads: a step (us) | a thread's sweep (us, mean) | "
               "sweeps / 1-thread step | step - longest sweep (us) | imbalance (us) | particles handed over a call | "
-              "finishing them (us a call) |")
-        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+              "finishing them (us a call) |" + (" blocks in series: sweeps / 1-thread step | 2 threads' sweeps / "
+                                                "in series |" if serial else ""))
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if serial else ""))
         for key, label, _ in probs:
             two = [x for x in steps.get((key, 2), []) if x["sweep_us"]]
             one = steps.get((key, 1), [])
@@ -266,14 +294,27 @@ def main():
             handed = statistics.median(x["handed"] for x in two)
             head = statistics.median(x["head_us"] or 0.0 for x in two)
             imb_s = f"{imbalance:.1f}" if imbalance is not None else "-"
+            ser_s, split_own, second_core = "", None, None
+            if serial:
+                plain = all(not x.get("step_pairs") for x in one + two)
+                if key in serial and plain:
+                    ser = statistics.median(x["sweeps_us"] for x in serial[key])
+                    split_own = ser / one_us
+                    second_core = statistics.median(sum(x["sweep_us"]) for x in two) / ser
+                    ser_s = f" {split_own:.2f} | {second_core:.2f} |"
+                else:
+                    ser_s = " - | - |"
             print(f"| {label} | {one_us:.1f} | {two_us:.1f} | {mean_sweep:.1f} | {work:.2f} | {rest:.1f} | {imb_s} | "
-                  f"{handed:.0f} | {head:.1f} |")
+                  f"{handed:.0f} | {head:.1f} |" + ser_s)
             for row in rows:
                 if row["problem"] == label and row["threads"] == 2:
                     row["step_us_one_thread"], row["step_us"] = one_us, two_us
                     row["sweep_us_mean"], row["sweeps_over_one_thread_step"] = mean_sweep, work
                     row["step_minus_longest_sweep_us"], row["handed_over_per_call"] = rest, handed
                     row["head_us"] = head
+                    if split_own is not None:
+                        row["serial_sweeps_over_one_thread_step"] = split_own
+                        row["sweeps_over_serial_sweeps"] = second_core
                     if imbalance is not None:
                         row["imbalance_us"] = imbalance
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.

@@ -21,7 +21,9 @@ stay in OUT):
      two independent one-thread runs started together gave on the same scale (--ceiling: the
      most any two-thread code could reach on this machine at that moment). Identical:
      the last one- and two-thread runs of each problem end with the same kinetic energies, to
-     every digit.
+     every digit. --serial-blocks too: the blocks swept one after another on one thread
+     (COHDEM_SERIAL_BLOCKS=1), where the problem takes plain steps, splits the two-thread loss
+     into the split's own work and what the second core adds.
   3. Cost per particle-step flat within 20 % from 10^4 to 10^6 particles: the one-thread
      median rates of the same scaling runs, 10^4 over 10^6. Where LAMMPS is installed, the
      scaling runs also time it on the same gases (scaling.py --lammps): its own 10^6-over-10^4
@@ -91,7 +93,8 @@ def scaling(a, out):
     d = os.path.join(out, "scaling")
     sizes = [a.small, a.mid, a.large]
     cmd = [sys.executable, os.path.join(HERE, "scaling.py"), "--sizes", ",".join(map(str, sizes)), "--threads", "1,2",
-           "--repeat", str(a.repeat), "--steps", str(a.steps), "--chute", "--per-core", "--ceiling", "--cohdem", a.cohdem,
+           "--repeat", str(a.repeat), "--steps", str(a.steps), "--chute", "--per-core", "--ceiling", "--serial-blocks",
+           "--cohdem", a.cohdem,
            "--out", d]
     if a.chute_data:
         cmd += ["--chute-data", a.chute_data]
@@ -111,7 +114,8 @@ def scaling(a, out):
         # reach here), each over the mean of the cores' one-thread medians.
         speed[label] = {k: two[k] for k in ("one_thread_per_core", "speedup_mean_core", "ceiling_mean_core")}
         # Where the two threads' time went (summary.json's thread_sweep, through scaling.py).
-        for k in ("sweeps_over_one_thread_step", "step_minus_longest_sweep_us", "imbalance_us", "handed_over_per_call"):
+        for k in ("sweeps_over_one_thread_step", "step_minus_longest_sweep_us", "imbalance_us", "handed_over_per_call",
+                  "serial_sweeps_over_one_thread_step", "sweeps_over_serial_sweeps"):
             if k in two:
                 speed[label][k] = two[k]
         speed[label]["speedup_unpinned"] = two["median_particle_steps_per_s"] / one["median_particle_steps_per_s"]
@@ -205,6 +209,13 @@ def table(got):
         if parts:
             meas += ("; the two threads' sweeps over the one-thread step, a step beyond the longest sweep"
                      " and the calls' imbalance: " + "; ".join(parts))
+        # The blocks swept in series on one thread (scaling.py --serial-blocks; plain steps
+        # only): the split's own work over the one-thread step, and what the second core added.
+        ser = [f"{k} {v['serial_sweeps_over_one_thread_step']:.2f}x and {v['sweeps_over_serial_sweeps']:.2f}x"
+               for k, v in sp.items() if "serial_sweeps_over_one_thread_step" in v]
+        if ser:
+            meas += ("; the blocks swept in series on one thread over the one-thread step (the split's own work),"
+                     " and the two threads' sweeps over those in series (what the second core adds): " + "; ".join(ser))
         ok = ident and all(v["speedup_mean_core"] >= 1.8 for v in sp.values())
         status = verdict(ok)
         if not ok:

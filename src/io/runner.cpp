@@ -297,12 +297,17 @@ int run_case(Case c, const RunOptions& opt) {
     // pours and outputs decide step by step (summary.json's step_pairs counts them).
     const std::string pairs = c.cfg.pair_min < 0        ? "off (pair_steps = false)"
                               : System::pairs_off_by_env() ? "off (COHDEM_PAIR=0)"
+                              : s.serial_blocks()          ? "off (COHDEM_SERIAL_BLOCKS=1)"
                               : c.thermal.enabled          ? "off (thermal model)"
                               : !s.pairs_fit_size()
                                   ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
                                   : "where the run allows (summary.json: step_pairs)";
     spdlog::info("force loop: {} thread(s), list screening {}, two steps per sweep {}", nt,
                  screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)" : "scalar", pairs);
+    if (s.serial_blocks())
+      spdlog::warn("force loop: the {} threads' blocks run one after another on one thread (COHDEM_SERIAL_BLOCKS=1, "
+                   "a diagnostic: the same results, not the threads' speed)",
+                   nt);
   }
 
   if (!resuming) s.prepare();
@@ -498,7 +503,10 @@ int run_case(Case c, const RunOptions& opt) {
                            {"longest_sweep_us_per_call", 1e6 * ts.longest_total / calls},
                            {"balanced_sweep_us_per_call", 1e6 * ts.balanced_total / calls},
                            {"rebalances", ts.rebalances},  // splits moved by the measured times
-                           {"shares", ts.share}};  // each block's share of the modelled work at the end
+                           {"shares", ts.share},  // each block's share of the modelled work at the end
+                           // the blocks swept one after another on one thread (SimConfig::serial_blocks)
+                           {"serial_blocks", s.serial_blocks()},
+                           {"serial_calls", ts.serial_calls}};
     }
   }
   j["screening"] = screen_avx2_enabled() ? "avx2" : "scalar";  // the force loop's list screening (results identical)

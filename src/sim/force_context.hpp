@@ -226,6 +226,7 @@ struct PairSlots {
   }
   uint32_t epoch = 0;  ///< force calls made through this PairSlots, the last one's number (wraps)
   uint64_t chained_calls = 0;  ///< of those, calls that ended without the barrier (tests)
+  uint64_t serial_calls = 0;   ///< of those, calls whose blocks ran one after another (ForceContext::serial_blocks)
   /// Since the slots were made, for the run's summary (summary.json's thread_sweep): force
   /// calls timed on several threads (thread 0's measured()), and per thread the seconds of its sweeps
   /// (measured(): its block and the head it finished for the thread after it, waits left
@@ -570,6 +571,9 @@ struct ForceContext {
   /// recording, the gathered pairs stored compactly (the kernel sizes `pair` itself). Null:
   /// `pair` covers the list (needs_pair_buffer) and each thread finishes its own particles.
   PairSlots* slots = nullptr;
+  /// Diagnostics (SimConfig::serial_blocks): a call on several threads whose blocks are
+  /// chained sweeps them one after another on the calling thread, the last first.
+  bool serial_blocks = false;
   /// Contact radius of each live pair (indexed like nl.jdx) and wall entry, when not null
   /// (conduction, contact network).
   double* a_pair = nullptr;

@@ -185,6 +185,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // region. Out of line: one copy for both callers (tests/cli/kernel_inlined.sh checks it has
   // no calls left but the allowed ones).
   bool timed = false;  // the region's threads timed their sweeps
+  // ForceContext::serial_blocks: the team's size and this block's number, given to `region`
+  // called once per block on this thread (0: a real team).
+  long serial_nt = 0, serial_tid = 0;
   auto region = [&](State* const __restrict hs, uint8_t* const __restrict live, const uint32_t* const __restrict start,
                     const uint32_t* const __restrict jdx, const uint8_t* const __restrict image,
                     const uint32_t* const __restrict rstart, const uint32_t* const __restrict rpair,
@@ -197,7 +200,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
                     const double kick_h, const double open_dt, const uint32_t* const __restrict dep_lo,
                     const Params* const __restrict params, const size_t nmat, const uint32_t entries, const bool simd,
                     const void* const lane_p) __attribute__((noinline)) {
-    const long nt = omp_get_num_threads(), tid = omp_get_thread_num();
+    const long nt = serial_nt > 0 ? serial_nt : omp_get_num_threads(),
+               tid = serial_nt > 0 ? serial_tid : omp_get_thread_num();
     const bool share = nt > 1 && c.slots != nullptr;
     if (share && nt != nt_plan) {
 #pragma omp single
@@ -668,7 +672,17 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if (two) c.drift2->merge(drift_b);
     }
   };
-  if (parallel) {
+  if (parallel && c.serial_blocks && c.slots != nullptr && c.slots->chained && !two) {
+    // The blocks one after another, the last first: a chained block waits only for the
+    // hand-off of the block after it (PairSlots::wait_for), which is then already made.
+    serial_nt = nt_plan;
+    for (serial_tid = nt_plan - 1; serial_tid >= 0; --serial_tid)
+      region(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, inertia, flag, species,
+             force, torque, rev, dt, grav, a_pair, want_a, keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd,
+             lane_p);
+    serial_nt = 0;
+    ++c.slots->serial_calls;
+  } else if (parallel) {
 #pragma omp parallel
     region(hs, live, start, jdx, image, rstart, rpair, wstart, shift, x, v, omega, radius, mass, inertia, flag, species,
            force, torque, rev, dt, grav, a_pair, want_a, keep_pair, kick_h, open_dt, dep_lo, params, nmat, entries, simd,

@@ -210,6 +210,7 @@ void System::compute_forces(double kick_h, bool open_next, Drift* second) {
   }
   ctx.keep_pair = record;
   ctx.slots = &slots_;
+  ctx.serial_blocks = serial_blocks();
   ctx.a_pair = record ? a_pair_.data() : nullptr;
   ctx.a_wall = record ? a_wall_.data() : nullptr;
   // The per-pair results exist only when read (one thread without recording never touches
@@ -381,6 +382,14 @@ bool System::pairs_off_by_env() {
   return off;
 }
 
+bool System::serial_blocks_by_env() {
+  static const bool on = [] {
+    const char* e = std::getenv("COHDEM_SERIAL_BLOCKS");
+    return e != nullptr && std::string(e) == "1";
+  }();
+  return on;
+}
+
 bool System::pairs_fit_size() const {
   // pair_min particles per thread: on the development VM, two threads gained about 4 %
   // at 10^6 particles and lost about 11 % at 10^5 (docs/performance.md, thirty-fifth round).
@@ -392,7 +401,7 @@ bool System::pairs_allowed() const {
   if (!pairs_fit_size() || !opened_ || dirty_ || thermal || !pours.empty() ||
       cfg.record_contacts || !nl.attached.empty() || !nl.has_reference(particles.size()) || nl.tracks_radii())
     return false;
-  if (pairs_off_by_env()) return false;
+  if (pairs_off_by_env() || serial_blocks()) return false;
   // Walls that stay where they are: the second step's wall contacts are evaluated with the
   // walls of the first.
   for (const Wall& W : walls)

@@ -59,6 +59,14 @@ struct SimConfig {
   /// fraction of what triggers a rebuild (a rebuild falling between the two steps of a pair
   /// undoes the pair). 1: pairs up to the rebuild (tests use it to take the way back).
   double pair_margin = 0.75;
+  /// Diagnostics: the force loop's blocks, split for omp_get_max_threads() threads as
+  /// always, are swept one after another by the calling thread (the last block first, so
+  /// that each block's head is handed over before the block before needs it), where a
+  /// call ends without the barrier (PairSlots::chained). The same bits as the threads; its
+  /// `thread_sweep` then gives the split's own cost with no second core (no lines moving
+  /// between caches, no waits; docs/performance.md, forty-third round). Two steps in one
+  /// sweep are off with it. The environment variable COHDEM_SERIAL_BLOCKS=1 turns it on.
+  bool serial_blocks = false;
 };
 
 class ThermalModel;  // thermal/thermal.hpp
@@ -129,6 +137,11 @@ class System {
   /// Whether the environment variable COHDEM_PAIR=0 switches step_pair's pairs off (for
   /// comparisons; the case file's `pair_steps = false` does the same).
   static bool pairs_off_by_env();
+  /// Whether the environment variable COHDEM_SERIAL_BLOCKS=1 asks for SimConfig::serial_blocks.
+  static bool serial_blocks_by_env();
+  /// Whether the force loop's blocks run one after another (SimConfig::serial_blocks or the
+  /// environment).
+  bool serial_blocks() const { return cfg.serial_blocks || serial_blocks_by_env(); }
   /// Whether the particle count reaches SimConfig::pair_min per thread (and pairs are on).
   bool pairs_fit_size() const;
   /// step_pair's counts: pairs evaluated in one sweep, of those undone (a rebuild fell

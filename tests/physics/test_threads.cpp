@@ -25,6 +25,7 @@ struct State {
   size_t contacts = 0;
   int threads = 0;
   uint64_t chained_calls = 0;  ///< force calls that ended without the barrier
+  uint64_t serial = 0;         ///< force calls whose blocks ran one after another (SimConfig::serial_blocks)
   uint64_t timed_calls = 0;    ///< force calls on several threads (PairSlots' totals)
   std::vector<double> busy;    ///< per thread, seconds of its sweeps
   std::vector<uint64_t> handed;  ///< per thread, particles it handed to the thread before
@@ -92,6 +93,7 @@ State run(int threads, bool record = false, bool column = false) {
   st.busy = s->thread_split().busy_total;
   st.handed = s->thread_split().handed_total;
   st.head = s->thread_split().head_total;
+  st.serial = s->thread_split().serial_calls;
   st.longest = s->thread_split().longest_total;
   st.balanced = s->thread_split().balanced_total;
   return st;
@@ -185,6 +187,7 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   EXPECT_GT(b.head[0], 0.0);
   EXPECT_LT(b.head[0], b.busy[0]);
   EXPECT_EQ(b.head[1], 0.0);
+  EXPECT_EQ(b.serial, 0u);  // the threads, not the diagnostic (SimConfig::serial_blocks)
   // Call by call the longest sweep is at least each thread's and at most their sum, and the
   // balanced sweep (the call's work over the sum of the threads' rates) is at most the
   // longest, so the totals keep the same order; none are kept on one thread.
@@ -196,6 +199,31 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
   std::printf("[info] column: longest sweeps %.3f s, balanced %.3f s\n", b.longest, b.balanced);
   std::printf("[info] column: %zu contact-steps, %llu builds, %llu of the two-thread calls chained\n", a.contacts,
               (unsigned long long)a.builds, (unsigned long long)b.chained_calls);
+}
+
+// SimConfig::serial_blocks (the diagnostic behind COHDEM_SERIAL_BLOCKS=1): the two threads'
+// blocks swept one after another on one thread, the last first, must give the threads' bits
+// (the same sums in the same order) and time both blocks, with the hand-off made.
+TEST(Threads, BlocksSweptInSeriesGiveTheThreadsStates) {
+  const State a = run(1, false, true);
+  auto s = make_box(2, false, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125);
+  s->cfg.serial_blocks = true;
+  EXPECT_TRUE(s->serial_blocks());
+  size_t contacts = 0;
+  s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
+  State b = state_of(*s);
+  b.contacts = contacts;
+  const PairSlots& ts = s->thread_split();
+  omp_set_num_threads(1);
+  expect_identical(a, b);
+  EXPECT_GT(ts.chained_calls, 300u);  // of 400 steps' force calls, as with the threads
+  // each of them in series but the first evaluation (make_box's prepare(), before the switch)
+  EXPECT_EQ(ts.serial_calls + 1, ts.chained_calls);
+  ASSERT_EQ(ts.busy_total.size(), 2u);
+  EXPECT_GT(ts.busy_total[0], 0.0);
+  EXPECT_GT(ts.busy_total[1], 0.0);
+  EXPECT_GT(ts.handed_total[1], 0u);  // block 1's head finished by block 0's pass
+  EXPECT_GT(ts.head_total[0], 0.0);
 }
 
 // The AVX2 screening (four list entries at a time) and the scalar one pick the same entries
