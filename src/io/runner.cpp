@@ -304,7 +304,7 @@ int run_case(Case c, const RunOptions& opt) {
                                   : "where the run allows (summary.json: step_pairs)";
     spdlog::info("force loop: {} thread(s), list screening {}, two steps per sweep {}", nt,
                  screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)" : "scalar", pairs);
-    if (s.serial_blocks())
+    if (s.serial_blocks() && nt > 1)
       spdlog::warn("force loop: the {} threads' blocks run one after another on one thread (COHDEM_SERIAL_BLOCKS=1, "
                    "a diagnostic: the same results, not the threads' speed)",
                    nt);
