@@ -200,12 +200,11 @@ def main():
                 j = summary(out)
                 ts = j.get("thread_sweep")
                 if ts and ts.get("serial_calls"):
-                    serial.setdefault(key, []).append(
-                        {"loop_us": 1e6 * j["loop_time_s"] / max(1, j["steps"]),
-                         "sweeps_us": sum(ts["sweep_us_per_call"]) * ts["force_calls"] / max(1, j["steps"]),
-                         "serial_calls": ts["serial_calls"], "force_calls": ts["force_calls"]})
+                    # the blocks' sweeps summed, per step
+                    sweeps = sum(ts["sweep_us_per_call"]) * ts["force_calls"] / max(1, j["steps"])
+                    serial.setdefault(key, []).append(sweeps)
                     print(f"  run {r + 1}: {label:>16s}, 2 blocks in series: {j['particle_steps_per_s']:10.4g} "
-                          f"particle-steps/s, blocks' sweeps {serial[key][-1]['sweeps_us']:.1f} us a step", flush=True)
+                          f"particle-steps/s, blocks' sweeps {sweeps:.1f} us a step", flush=True)
             if a.lammps and key != "chute":
                 lammps_run(key, label, r)
             if a.ceiling:
@@ -298,7 +297,7 @@ def main():
             if serial:
                 plain = all(not x.get("step_pairs") for x in one + two)
                 if key in serial and plain:
-                    ser = statistics.median(x["sweeps_us"] for x in serial[key])
+                    ser = statistics.median(serial[key])
                     split_own = ser / one_us
                     second_core = statistics.median(sum(x["sweep_us"]) for x in two) / ser
                     ser_s = f" {split_own:.2f} | {second_core:.2f} |"

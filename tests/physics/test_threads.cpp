@@ -80,10 +80,12 @@ State state_of(const System& s) {
 }
 
 // 400 steps of make_box's box, or of a column of the same solids fraction (column: its force
-// loop on several threads ends without the barrier, PairSlots::chained).
-State run(int threads, bool record = false, bool column = false) {
+// loop on several threads ends without the barrier, PairSlots::chained); serial: the blocks
+// swept one after another (SimConfig::serial_blocks) after the first force evaluation.
+State run(int threads, bool record = false, bool column = false, bool serial = false) {
   auto s = column ? make_box(threads, record, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125)
                   : make_box(threads, record);
+  s->cfg.serial_blocks = serial;
   size_t contacts = 0;
   s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
   State st = state_of(*s);
@@ -205,25 +207,19 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalStatesWithoutTheBarrier) {
 // blocks swept one after another on one thread, the last first, must give the threads' bits
 // (the same sums in the same order) and time both blocks, with the hand-off made.
 TEST(Threads, BlocksSweptInSeriesGiveTheThreadsStates) {
-  const State a = run(1, false, true);
-  auto s = make_box(2, false, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125);
-  s->cfg.serial_blocks = true;
-  EXPECT_TRUE(s->serial_blocks());
-  size_t contacts = 0;
-  s->run(400, [&](const System& sys) { contacts += sys.contact_count(); });
-  State b = state_of(*s);
-  b.contacts = contacts;
-  const PairSlots& ts = s->thread_split();
+  const State a = run(1, false, true), b = run(2, false, true, true);
   omp_set_num_threads(1);
   expect_identical(a, b);
-  EXPECT_GT(ts.chained_calls, 300u);  // of 400 steps' force calls, as with the threads
+  EXPECT_GT(b.chained_calls, 300u);  // of 400 steps' force calls, as with the threads
   // each of them in series but the first evaluation (make_box's prepare(), before the switch)
-  EXPECT_EQ(ts.serial_calls + 1, ts.chained_calls);
-  ASSERT_EQ(ts.busy_total.size(), 2u);
-  EXPECT_GT(ts.busy_total[0], 0.0);
-  EXPECT_GT(ts.busy_total[1], 0.0);
-  EXPECT_GT(ts.handed_total[1], 0u);  // block 1's head finished by block 0's pass
-  EXPECT_GT(ts.head_total[0], 0.0);
+  EXPECT_EQ(b.serial + 1, b.chained_calls);
+  ASSERT_EQ(b.busy.size(), 2u);
+  EXPECT_GT(b.busy[0], 0.0);
+  EXPECT_GT(b.busy[1], 0.0);
+  ASSERT_EQ(b.handed.size(), 2u);
+  EXPECT_GT(b.handed[1], 0u);  // block 1's head finished by block 0's pass
+  ASSERT_EQ(b.head.size(), 2u);
+  EXPECT_GT(b.head[0], 0.0);
 }
 
 // The AVX2 screening (four list entries at a time) and the scalar one pick the same entries
