@@ -38,6 +38,12 @@ COHDEM_INLINE void open_free(Vec3& v, Vec3& w, Vec3& x, const Vec3& F, const Vec
 struct PairResult {
   Vec3 f, tj;
 };
+/// What a slot of a pair not in contact holds (PairSlots): adding it to a gather's sums
+/// changes no bit of them, whatever they hold, signed zeros included (s - (+0) = s and
+/// s + (-0) = s for every s; s + (+0) would turn -0 into +0). The gather of a particle
+/// whose pairs lie in consecutive slots can then sum all of them, without asking which are
+/// live: the same sums as skipping the dead ones.
+inline constexpr PairResult kNoPair{Vec3{0.0, 0.0, 0.0}, Vec3{-0.0, -0.0, -0.0}};
 
 /// The force loop's split of n particles over nt threads without a PairSlots (whose plan()
 /// splits by work): thread t sweeps [n t/nt, n (t+1)/nt).
@@ -111,8 +117,23 @@ struct PairSlots {
   /// The smallest share a block is given, as a fraction of an equal share.
   static constexpr double kMinShare = 0.25;
   std::vector<long> bound;   ///< thread t sweeps particles [bound[t], bound[t + 1])
-  std::vector<uint32_t> of;  ///< slot of each list entry, kNone where nothing is stored
+  /// Slot of each list entry, kNone where nothing is stored. Numbered by partner, not by
+  /// row (update()): the pairs of a particle whose pairs are stored (one that depends on
+  /// rows outside its block) take consecutive slots, in the order of its transposed list
+  /// (NeighborList::rpair), and such particles, ascending, take ascending runs; its gather
+  /// then reads one run of slots, and the boundary's particles, finished in ascending
+  /// order, one stream.
+  std::vector<uint32_t> of;
   uint32_t count = 0;        ///< slots in use
+  /// The slots hold nothing valid: a new map, a call that stored its results by list entry
+  /// (recording), or contacts ended behind the force loop's back (System::step_pair's undo
+  /// restores an older history; whoever does so sets it). The force loop then fills them
+  /// with kNoPair before its sweep, as it does when handed another buffer than the one it
+  /// filled (`filled`). From then on every pair that is picked (in contact, or live before
+  /// the call) writes its slot, its result when in contact and kNoPair when not, so a slot
+  /// whose pair is not in contact holds kNoPair.
+  bool refill = true;
+  const PairResult* filled = nullptr;  ///< the buffer the slots were last filled in
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
   std::vector<DeferList> deferred;
@@ -492,20 +513,29 @@ struct PairSlots {
       if (tails && tail(t) > cut.back()) cut.push_back(tail(t));
       if (bound[size_t(t + 1)] > cut.back()) cut.push_back(bound[size_t(t + 1)]);
     }
+    // A pair gets a slot when its partner j is not local to the piece of its row; j then
+    // depends on a row before its own piece [a, b), so it lies in [a, a + span), and every
+    // pair of j gets one (its rows before a lie in other pieces, the rest in a piece where
+    // j is not local). So the slots are given particle by particle: each piece's first
+    // `span` particles, ascending, and of each one that is not local to its piece all its
+    // pairs, in the order of its transposed list. The rows that can hold such pairs, those
+    // within `span` of a cut, are cleared first (kNone: nothing stored).
     count = 0;
-    long from = 0;  // rows before it are mapped (or need no slot)
+    long from = 0;  // rows before it are cleared
     for (size_t u = 1; u + 1 < cut.size(); ++u) {
       const long p = cut[u];
       const long lo = std::max(from, p - span), hi = std::min(n, p + span);
-      size_t piece = 0;  // the piece of row i
-      for (long i = lo; i < hi; ++i) {
-        while (cut[piece + 1] <= i) ++piece;
-        const long a = cut[piece], b = cut[piece + 1];
-        for (uint32_t k = nl.start[i]; k < nl.start[i + 1]; ++k)
-          of[k] = local_to_block(nl.dep_lo.data(), nl.jdx[k], a, b) ? kNone : count++;
-      }
+      if (lo < hi) std::fill(of.begin() + nl.start[size_t(lo)], of.begin() + nl.start[size_t(hi)], kNone);
       from = std::max(from, hi);
     }
+    for (size_t u = 1; u + 1 < cut.size(); ++u) {
+      const long a = cut[u], b = cut[u + 1];
+      for (long q = a; q < std::min(b, a + span); ++q) {
+        if (local_to_block(nl.dep_lo.data(), uint32_t(q), a, b)) continue;
+        for (uint32_t r = nl.rstart[size_t(q)]; r < nl.rstart[size_t(q) + 1]; ++r) of[nl.rpair[r]] = count++;
+      }
+    }
+    refill = true;
   }
 
  private:

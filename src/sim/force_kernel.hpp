@@ -150,11 +150,17 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   auto setup_slots = [&](const long nt) __attribute__((always_inline)) {
     if (keep_pair) {
       c.slots->plan(nl, n, nt);  // the blocks only: every result is stored by list entry
+      c.slots->refill = true;    // (over what the slots held)
     } else {
       c.slots->update(nl, n, nt, two);
       c.slots->fit(c.pair);
       res = c.pair.data();
       slot_of = c.slots->of.data();
+      if (c.slots->refill || c.slots->filled != res) {  // pairs not in contact: kNoPair (PairSlots::refill)
+        std::fill(res, res + c.slots->count, kNoPair);
+        c.slots->refill = false;
+        c.slots->filled = res;
+      }
     }
     if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
     if (two && !c.slots->chained)
@@ -258,6 +264,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         live[k] = alive;
         if (!alive) {
           if (reset) hs[k] = State{};  // as ContactLaw::evaluate does
+          // A slot (j not local) of a pair not in contact holds kNoPair (PairSlots::of).
+          if (!kAllLocal && slot_of != nullptr && !local(j, a, b)) res[slot_of[k]] = kNoPair;
         } else {
           force[i] += f;
           torque[i] += ti;
@@ -342,11 +350,25 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         R = rev[i].f;
         RT = rev[i].tj;
         rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
+      } else if (slot_of != nullptr) {
+        // i's pairs in consecutive slots, in the order of its transposed list, those not in
+        // contact holding kNoPair (PairSlots::of): one run read front to back, the sums of
+        // the live ones bit for bit. Across the particles finished in ascending order (the
+        // boundary's, handed over) the runs ascend too, so the reads form a stream that the
+        // hardware prefetches, also from the other core's cache.
+        const uint32_t q0 = rstart[i], m = rstart[i + 1] - q0;
+        if (m > 0) {
+          const PairResult* const r = res + slot_of[rpair[q0]];
+          for (uint32_t q = 0; q < m; ++q) {
+            R -= r[q].f;
+            RT += r[q].tj;
+          }
+        }
       } else {
         for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
           const uint32_t k = rpair[q];
           if (live[k]) {
-            const PairResult& r = res[slot_of ? slot_of[k] : k];
+            const PairResult& r = res[k];
             R -= r.f;
             RT += r.tj;
           }

@@ -516,6 +516,7 @@ void System::step_pair() {
     particles.omega = snap_.omega;
     snap_.hist.restore(nl.hist);
     snap_.whist.restore(nl.whist);
+    slots_.refill = true;  // the pairs in contact are the snapshot's: no slot is known to hold kNoPair
     time = snap_.time;
     step = snap_.step;
     pair_stats_.replayed_steps += target - step;

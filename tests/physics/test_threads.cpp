@@ -5,6 +5,7 @@
 // thread's own particles and stores and gathers only those of block-boundary particles,
 // unless asked to record all: several code paths, one result).
 #include <gtest/gtest.h>
+#include <algorithm>
 #include <omp.h>
 
 #include "fixture.hpp"
@@ -123,6 +124,7 @@ void force_call(System& s, PairSlots* ps, double kick_h) {
   c.keep_pair = false;
   c.slots = ps;
   c.kick_h = kick_h;
+  if (ps != nullptr) ps->refill = true;  // a new buffer, and callers restore the history between calls
   s.model->compute(c);
 }
 
@@ -557,6 +559,58 @@ TEST(Threads, BlocksOfTheForceLoopHoldEqualWork) {
       EXPECT_LE(std::abs(double(bw) - target), double(wmax)) << nt << " threads, block " << t;
     }
   }
+}
+
+// The slots of the pairs gathered across block boundaries (PairSlots::update): a pair has
+// one exactly when its partner j is not local to the piece of its row (as the force loop
+// decides, put()); the slots are numbered by partner, so that each particle whose pairs are
+// gathered finds them in one run of consecutive slots, in the order of its transposed list
+// (the order its sums take), the runs ascending with the particle and covering every slot
+// once. For plain calls (the blocks) and two-step calls (the blocks cut at their tails).
+TEST(Threads, GatheredPairsOfAParticleTakeOneRunOfSlots) {
+  auto s = make_box(1, false);  // flat: wide boundaries between the blocks
+  s->run(150);
+  const NeighborList& nl = s->nl;
+  const long n = long(s->particles.size());
+  size_t all_stored = 0, all_runs = 0;
+  for (long nt : {2L, 3L}) {
+    for (bool tails : {false, true}) {
+      PairSlots ps;  // fresh: every entry of the map is set
+      ps.update(nl, n, nt, tails);
+      std::vector<long> cut{0};  // the pieces, as update() cuts them
+      for (long t = 0; t < nt; ++t) {
+        if (tails && ps.tail(t) > cut.back()) cut.push_back(ps.tail(t));
+        if (ps.bound[size_t(t + 1)] > cut.back()) cut.push_back(ps.bound[size_t(t + 1)]);
+      }
+      auto piece_of = [&](long i) { return size_t(std::upper_bound(cut.begin(), cut.end(), i) - cut.begin() - 1); };
+      size_t stored = 0, wrong = 0;
+      for (long i = 0; i < n; ++i) {
+        const size_t u = piece_of(i);
+        for (uint32_t k = nl.start[size_t(i)]; k < nl.start[size_t(i) + 1]; ++k) {
+          const bool gathered = !local_to_block(nl.dep_lo.data(), nl.jdx[k], cut[u], cut[u + 1]);
+          stored += gathered;
+          wrong += gathered != (ps.of[k] != PairSlots::kNone);
+        }
+      }
+      EXPECT_EQ(wrong, 0u) << nt << " threads, tails " << tails;
+      EXPECT_EQ(ps.count, stored) << nt << " threads, tails " << tails;
+      all_stored += stored;
+      uint32_t next = 0;  // the next slot a run must start at
+      size_t runs = 0, broken = 0;
+      for (long q = 0; q < n; ++q) {
+        const size_t u = piece_of(q);
+        if (local_to_block(nl.dep_lo.data(), uint32_t(q), cut[u], cut[u + 1])) continue;
+        ++runs;
+        for (uint32_t r = nl.rstart[size_t(q)]; r < nl.rstart[size_t(q) + 1]; ++r) broken += ps.of[nl.rpair[r]] != next++;
+      }
+      all_runs += runs;
+      EXPECT_EQ(broken, 0u) << nt << " threads, tails " << tails;
+      EXPECT_EQ(next, ps.count) << nt << " threads, tails " << tails;  // every slot in one run
+    }
+  }
+  EXPECT_GT(all_stored, 100u);
+  EXPECT_GT(all_runs, 20u);
+  std::printf("[info] %zu pairs gathered through %zu runs of slots\n", all_stored, all_runs);
 }
 
 // The split follows measured sweep times (PairSlots::rebalance): a thread that took twice
