@@ -2,7 +2,7 @@
 // (docs/performance.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
 // machine before a benchmark session.
 //
-//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|OmpSync|Streams'
+//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|RemoteLines|OmpSync|Streams'
 //
 // How long data stays in this core's caches while the core does something else: the force
 // calls right after a neighbor-list build run slower, and so do those after a pause of the
@@ -158,6 +158,66 @@ void BM_CoreToCore(benchmark::State& st) {
 }
 
 BENCHMARK(BM_CoreToCore)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+// BM_RemoteLines: what a line written by the other core costs when it is read, where the
+// reads cannot overlap. The other thread (second CPU) writes one word in each of 4000 lines
+// (256 KiB, within any L2); then this thread (first CPU) walks them once along a random
+// cycle, each load's address taken from the one before, timed (ns_per_line); and hands them
+// back. What the force loop pays for the particles at a block boundary, which both cores
+// touch every step, follows it. On the forty-third round's Zen 3 VM it took one of two values
+// that the host switched between every few tens of seconds, 18-24 ns and 65-80 ns ("the
+// host's placement of the two vCPUs"; docs/performance.md, forty-third and forty-fourth rounds:
+// the chute's block-boundary finishing 21-25 against 46-50 us a step); bench/scaling.py
+// --placement reads it before and after each two-thread run.
+void BM_RemoteLines(benchmark::State& st) {
+  const auto [c0, c1] = two_cpus();
+  if (c1 < 0) {
+    st.SkipWithError("needs two CPUs");
+    return;
+  }
+  constexpr size_t kLines = 4000;
+  // Word 0 of each line: the index of the next line's word (Sattolo: one cycle); word 1:
+  // what the other thread writes (the line is then in its cache, modified).
+  std::vector<uint64_t> buf(kLines * 8);
+  std::vector<uint64_t> order(kLines);
+  for (size_t i = 0; i < kLines; ++i) order[i] = i;
+  std::mt19937_64 rng(2);
+  for (size_t i = kLines - 1; i > 0; --i) std::swap(order[i], order[std::uniform_int_distribution<size_t>(0, i - 1)(rng)]);
+  for (size_t i = 0; i < kLines; ++i) buf[order[i] * 8] = order[(i + 1) % kLines] * 8;
+  std::atomic<int> turn{0};  // 1: the other thread writes; 0: this one walks; -1: stop
+  std::thread other([&, c1 = c1] {
+    pin_to(c1);
+    for (;;) {
+      int t;
+      while ((t = turn.load(std::memory_order_acquire)) == 0) {
+      }
+      if (t < 0) break;
+      for (size_t l = 0; l < kLines; ++l) buf[l * 8 + 1] += 1;
+      turn.store(0, std::memory_order_release);
+    }
+  });
+  cpu_set_t before;
+  pthread_getaffinity_np(pthread_self(), sizeof before, &before);
+  pin_to(c0);
+  uint64_t p = order[0] * 8;
+  for (auto _ : st) {
+    st.PauseTiming();
+    turn.store(1, std::memory_order_release);
+    while (turn.load(std::memory_order_acquire) != 0) {
+    }
+    st.ResumeTiming();
+    for (size_t l = 0; l < kLines; ++l) p = buf[p];
+  }
+  turn.store(-1, std::memory_order_release);
+  other.join();
+  pthread_setaffinity_np(pthread_self(), sizeof before, &before);
+  benchmark::DoNotOptimize(p);
+  st.counters["ns_per_line"] = benchmark::Counter(double(st.iterations()) * double(kLines),
+                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  st.SetLabel("CPUs " + std::to_string(c0) + " and " + std::to_string(c1));
+}
+
+BENCHMARK(BM_RemoteLines)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 void BM_OmpSync(benchmark::State& st) {
   const int nt = int(st.range(0));

@@ -54,6 +54,16 @@ lines moved between the cores' caches, a slower core), for the problems whose on
 two-thread runs took plain steps (no step pairs: at 10^5 and 10^6 particles they take them,
 and the comparison would not be like for like).
 
+--placement COHDEM_BENCH reads, before and after each two-thread run, what a cache line
+written by the other core costs (cohdem_bench's BM_RemoteLines, a fraction of a second). On
+the development VM it takes one of two values, which the host switches between every few tens
+of seconds (about 19 and 70 ns on the forty-third round's Zen 3), and every line the two
+threads pass at their blocks' boundary pays it, so the two-thread rate follows it while
+one-thread runs and two independent runs do not (docs/performance.md, forty-third and
+forty-fourth rounds). A table then gives the two-thread speed-up apart for the runs with both
+readings below --placement-split ns ("near") and both above ("far"); runs with one of each
+are counted as mixed.
+
 --lammps also runs LAMMPS (`lmp`, one rank; bench/install-peers.sh) on every size of the gas,
 once per repeat, with bench/peers/in.packing on the same data file and for the same number of
 steps: what the best-known peer's cost per particle-step does from size to size on this
@@ -94,6 +104,10 @@ def main():
                     help="also run the two threads' blocks one after another on one thread (COHDEM_SERIAL_BLOCKS=1)")
     ap.add_argument("--lammps", action="store_true",
                     help="also run LAMMPS (lmp, one rank) on every size of the gas, once per repeat")
+    ap.add_argument("--placement", metavar="COHDEM_BENCH", default=None,
+                    help="cohdem_bench: read BM_RemoteLines before and after each two-thread run")
+    ap.add_argument("--placement-split", type=float, default=40.0,
+                    help="ns a line: below it both times, a two-thread run counts as 'near', above as 'far'")
     ap.add_argument("--chute-data", default=os.path.join(REPO, "..", "shared", "peers", "lammps-chute", "data.chute"))
     a = ap.parse_args()
     sizes = [int(float(x)) for x in a.sizes.split(",")]
@@ -155,15 +169,30 @@ def main():
         where = f" on core {cpu}" if cpu is not None else ""
         print(f"  run {r + 1}: {label:>16s}, LAMMPS{where}: {rate:10.4g} particle-steps/s (cohdem {ours:.4g})", flush=True)
 
+    def remote_line_ns():
+        """BM_RemoteLines' ns a line now (None where it cannot run: one CPU, no binary)."""
+        try:
+            r = subprocess.run([a.placement, "--benchmark_filter=BM_RemoteLines", "--benchmark_min_time=0.05",
+                                "--benchmark_format=json"], capture_output=True, text=True, timeout=60)
+            b = json.loads(r.stdout)["benchmarks"][0]
+            return 1e9 * b["ns_per_line"] if "ns_per_line" in b and not b.get("error_occurred") else None
+        except (OSError, ValueError, KeyError, IndexError, subprocess.TimeoutExpired):
+            return None
+
     best, allr, pair, steps, serial = {}, {}, {}, {}, {}
     for r in range(a.repeat):
         for key, label, case in probs:
             for t in threads:
                 out = os.path.join(a.out, f"run_{key}_{t}")
+                probes = [remote_line_ns()] if a.placement and t == 2 else None
                 subprocess.run(cmd(case, t, out), check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                if probes:
+                    probes.append(remote_line_ns())
                 j = summary(out)
                 rate = j["particle_steps_per_s"]
-                print(f"  run {r + 1}: {label:>16s}, {t} thread(s): {rate:10.4g} particle-steps/s", flush=True)
+                where = (", a remote line " + "/".join("-" if x is None else f"{x:.0f}" for x in probes) + " ns"
+                         if probes else "")
+                print(f"  run {r + 1}: {label:>16s}, {t} thread(s): {rate:10.4g} particle-steps/s{where}", flush=True)
                 k = (key, t)
                 allr.setdefault(k, []).append(rate)
                 # The step loop's time a step, and on several threads where it went
@@ -182,7 +211,8 @@ def main():
                      "balanced_us": ts["balanced_sweep_us_per_call"] * per_step
                      if ts and "balanced_sweep_us_per_call" in ts else None,
                      "handed": sum(ts["handed_over_per_call"]) if ts else None,
-                     "step_pairs": (j.get("step_pairs") or {}).get("pairs", 0)})
+                     "step_pairs": (j.get("step_pairs") or {}).get("pairs", 0),
+                     "remote_line_ns": probes})
                 if k not in best or rate > best[k]["particle_steps_per_s"]:
                     best[k] = j
             for cpu in cores:
@@ -267,6 +297,34 @@ def main():
                     row["speedup_mean_core"] = two / mean
                     if key in pair:  # --ceiling on the same scale: two independent runs at once
                         row["ceiling_mean_core"] = statistics.median(pair[key]) / mean
+    if a.placement and 2 in threads:
+        # The two-thread runs by the remote line's cost around them (same order as allr's).
+        print(f"\ntwo threads by the host's placement of the two vCPUs (BM_RemoteLines before and after each "
+              f"run; near: both below {a.placement_split:g} ns a line, far: both above; medians)")
+        print("| particles | a remote line (ns, each run) | runs near / far / mixed | 2 threads / "
+              + ("mean core" if cores else "1 thread") + ", near | far |")
+        print("|---:|---|---:|---:|---:|")
+        for key, label, _ in probs:
+            one = (sum(statistics.median(allr[(key, f"core{c}")]) for c in cores) / len(cores) if cores
+                   else statistics.median(allr[(key, 1)]) if (key, 1) in allr else None)
+            cls = {"near": [], "far": [], "mixed": []}
+            seen = []
+            for x, rate in zip(steps.get((key, 2), []), allr.get((key, 2), [])):
+                pr = x.get("remote_line_ns") or []
+                if len(pr) != 2 or None in pr:
+                    continue
+                seen.append(pr)
+                c = ("near" if max(pr) < a.placement_split else "far" if min(pr) > a.placement_split else "mixed")
+                cls[c].append(rate)
+            sp = {c: (statistics.median(v) / one if v and one else None) for c, v in cls.items()}
+            fmt = lambda v: f"{v:.2f}" if v is not None else "-"
+            print(f"| {label} | " + ", ".join(f"{p:.0f}/{q:.0f}" for p, q in seen) +
+                  f" | {len(cls['near'])} / {len(cls['far'])} / {len(cls['mixed'])} | {fmt(sp['near'])} | {fmt(sp['far'])} |")
+            for row in rows:
+                if row["problem"] == label and row["threads"] == 2:
+                    row["placement"] = {"remote_line_ns": seen, "split_ns": a.placement_split,
+                                        "runs": {c: len(v) for c, v in cls.items()},
+                                        "speedup_near": sp["near"], "speedup_far": sp["far"]}
     if 1 in threads and any(x["sweep_us"] for v in steps.values() for x in v):
         print(f"\nwhere the two threads' time goes (medians of {a.repeat} runs; a sweep: one thread's block and "
               "the head it finishes for the next, per step, waits left out)")

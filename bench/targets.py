@@ -23,7 +23,10 @@ stay in OUT):
      the last one- and two-thread runs of each problem end with the same kinetic energies, to
      every digit. --serial-blocks too: the blocks swept one after another on one thread
      (COHDEM_SERIAL_BLOCKS=1), where the problem takes plain steps, splits the two-thread loss
-     into the split's own work and what the second core adds.
+     into the split's own work and what the second core adds. --placement too (with
+     cohdem_bench): the cost of a line written by the other core, read before and after each
+     two-thread run, gives the speed-ups apart for the host's two placements of the vCPUs
+     (shown beside the verdict, which is on all runs).
   3. Cost per particle-step flat within 20 % from 10^4 to 10^6 particles: the one-thread
      median rates of the same scaling runs, 10^4 over 10^6. Where LAMMPS is installed, the
      scaling runs also time it on the same gases (scaling.py --lammps): its own 10^6-over-10^4
@@ -100,6 +103,8 @@ def scaling(a, out):
         cmd += ["--chute-data", a.chute_data]
     if shutil.which("lmp"):
         cmd += ["--lammps"]
+    if os.path.exists(a.bench):  # the host's placement of the two vCPUs around each two-thread run
+        cmd += ["--placement", a.bench]
     if not run(cmd, os.path.join(out, "scaling.log")):
         return None
     js = json.load(open(os.path.join(d, "scaling.json")))
@@ -119,6 +124,8 @@ def scaling(a, out):
             if k in two:
                 speed[label][k] = two[k]
         speed[label]["speedup_unpinned"] = two["median_particle_steps_per_s"] / one["median_particle_steps_per_s"]
+        if two.get("placement"):
+            speed[label]["placement"] = two["placement"]
         # The last run of each thread count (scaling.py keeps each one's output folder).
         s1, s2 = (json.load(open(os.path.join(d, f"run_{key}_{t}", "summary.json"))) for t in (1, 2))
         fields = ("steps", "kinetic_energy", "translational_energy", "rotational_energy", "contacts")
@@ -216,6 +223,19 @@ def table(got):
         if ser:
             meas += ("; the blocks swept in series on one thread over the one-thread step (the split's own work),"
                      " and the two threads' sweeps over those in series (what the second core adds): " + "; ".join(ser))
+        # The same runs apart by the host's placement of the two vCPUs (scaling.py --placement:
+        # a line written by the other core, read before and after each run); the verdict is on
+        # all the runs.
+        def placed(v, c):
+            P = v.get("placement") or {}
+            x, m = P.get(f"speedup_{c}"), (P.get("runs") or {}).get(c, 0)
+            return f"{x:.2f}x ({m})" if x is not None else f"- ({m})"
+        if any(v.get("placement") for v in sp.values()):
+            split = next(v["placement"]["split_ns"] for v in sp.values() if v.get("placement"))
+            meas += (f"; the same runs by the host's placement of the vCPUs (a line written by the other core, before "
+                     f"and after each run, below {split:g} ns both times: near; above: far; runs in brackets): near "
+                     + " / ".join(placed(v, "near") for v in sp.values()) + ", far "
+                     + " / ".join(placed(v, "far") for v in sp.values()))
         ok = ident and all(v["speedup_mean_core"] >= 1.8 for v in sp.values())
         status = verdict(ok)
         if not ok:

@@ -109,9 +109,14 @@ fi
 # one-thread runs at once and --per-core's one-thread runs pinned to each core): a row per
 # thread count, positive rates and bytes per particle, the two runs' summed rate recorded
 # against the one-thread run, a one-thread rate per core (the first two this process may
-# use), and no run folder left holding its final checkpoint.
+# use), and no run folder left holding its final checkpoint. With cohdem_bench built,
+# --placement: the cost of a line written by the other core read before and after the
+# two-thread run (two positive readings, the run counted in one class, its speed-up given
+# for that class when near or far).
+placement=()
+[ -x "$bench_bin" ] && placement=(--placement "$bench_bin")
 if python3 "$src/bench/scaling.py" --sizes 1000 --threads 1,2 --steps 3 --repeat 1 --ceiling --per-core --cohdem "$bin" \
-     --out "$work/sc" > "$work/sc.log" 2>&1 &&
+     "${placement[@]}" --out "$work/sc" > "$work/sc.log" 2>&1 &&
    python3 -c "
 import json, math, os, sys
 rows = json.load(open('$work/sc/scaling.json'))['rows']
@@ -126,7 +131,14 @@ ok = ok and abs(rows[1]['speedup_mean_core'] - rows[1]['median_particle_steps_pe
 ok = ok and abs(rows[1]['ceiling_mean_core'] - c[0] / mean) < 1e-9 * rows[1]['ceiling_mean_core']
 runs = [d for d in os.listdir('$work/sc') if d.startswith('run_')]
 ok = ok and len(runs) == 4 + len(cores) and not any(os.path.exists(os.path.join('$work/sc', d, 'checkpoint.bin')) for d in runs)
-sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
+if os.access('$bench_bin', os.X_OK):
+    P = rows[1]['placement']
+    ok = ok and len(P['remote_line_ns']) == 1 and all(math.isfinite(x) and x > 0 for x in P['remote_line_ns'][0])
+    ok = ok and sum(P['runs'].values()) == 1
+    for c in ('near', 'far'):
+        ok = ok and (P['speedup_' + c] is None) == (P['runs'][c] == 0)
+        ok = ok and (P['runs'][c] == 0 or abs(P['speedup_' + c] - rows[1]['speedup_mean_core']) < 1e-9)
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core ${placement[*]:+--placement}"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
 # peer_compare.py's pinning without peers (cohdem alone, the chute, 2 rounds of 3 steps):
 # round r ran on core r mod (cores this process may use), recorded per run; each run's peak
 # resident memory recorded, and bytes per particle between 100 B (less than the particles'
