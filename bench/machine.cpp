@@ -58,16 +58,23 @@
 
 namespace {
 
-void BM_CacheAfterPause(benchmark::State& st) {
-  const size_t lines = size_t(st.range(0)) * 1024 / 64;
-  const auto pause = std::chrono::microseconds(st.range(1));
-  // Word 0 of each line holds the index of the next line's word (Sattolo: one cycle).
+/// `lines` 64-byte lines of eight words whose word 0 holds the index of the next line's
+/// word 0 along one random cycle through all of them (Sattolo), so that a walk p = buf[p]
+/// from 0 visits every line once, each load's address taken from the one before.
+std::vector<uint64_t> line_cycle(const size_t lines, const uint64_t seed) {
   std::vector<uint64_t> buf(lines * 8);
   std::vector<uint64_t> order(lines);
   for (size_t i = 0; i < lines; ++i) order[i] = i;
-  std::mt19937_64 rng(1);
+  std::mt19937_64 rng(seed);
   for (size_t i = lines - 1; i > 0; --i) std::swap(order[i], order[std::uniform_int_distribution<size_t>(0, i - 1)(rng)]);
   for (size_t i = 0; i < lines; ++i) buf[order[i] * 8] = order[(i + 1) % lines] * 8;
+  return buf;
+}
+
+void BM_CacheAfterPause(benchmark::State& st) {
+  const size_t lines = size_t(st.range(0)) * 1024 / 64;
+  const auto pause = std::chrono::microseconds(st.range(1));
+  std::vector<uint64_t> buf = line_cycle(lines, 1);
   uint64_t p = 0;
   for (size_t i = 0; i < lines; ++i) p = buf[p];  // warm
   uint64_t x = 88172645463325252ull;
@@ -176,14 +183,9 @@ void BM_RemoteLines(benchmark::State& st) {
     return;
   }
   constexpr size_t kLines = 4000;
-  // Word 0 of each line: the index of the next line's word (Sattolo: one cycle); word 1:
-  // what the other thread writes (the line is then in its cache, modified).
-  std::vector<uint64_t> buf(kLines * 8);
-  std::vector<uint64_t> order(kLines);
-  for (size_t i = 0; i < kLines; ++i) order[i] = i;
-  std::mt19937_64 rng(2);
-  for (size_t i = kLines - 1; i > 0; --i) std::swap(order[i], order[std::uniform_int_distribution<size_t>(0, i - 1)(rng)]);
-  for (size_t i = 0; i < kLines; ++i) buf[order[i] * 8] = order[(i + 1) % kLines] * 8;
+  // Word 0 of each line: the cycle's next line; word 1: what the other thread writes (the
+  // line is then in its cache, modified).
+  std::vector<uint64_t> buf = line_cycle(kLines, 2);
   std::atomic<int> turn{0};  // 1: the other thread writes; 0: this one walks; -1: stop
   std::thread other([&, c1 = c1] {
     pin_to(c1);
@@ -199,7 +201,7 @@ void BM_RemoteLines(benchmark::State& st) {
   cpu_set_t before;
   pthread_getaffinity_np(pthread_self(), sizeof before, &before);
   pin_to(c0);
-  uint64_t p = order[0] * 8;
+  uint64_t p = 0;
   for (auto _ : st) {
     st.PauseTiming();
     turn.store(1, std::memory_order_release);
