@@ -125,15 +125,14 @@ struct PairSlots {
   /// order, one stream.
   std::vector<uint32_t> of;
   uint32_t count = 0;        ///< slots in use
-  /// The slots hold nothing valid: a new map, a call that stored its results by list entry
-  /// (recording), or contacts ended behind the force loop's back (System::step_pair's undo
-  /// restores an older history; whoever does so sets it). The force loop then fills them
-  /// with kNoPair before its sweep, as it does when handed another buffer than the one it
-  /// filled (`filled`). From then on every pair that is picked (in contact, or live before
-  /// the call) writes its slot, its result when in contact and kNoPair when not, so a slot
-  /// whose pair is not in contact holds kNoPair.
+  /// The slots hold nothing valid: a new map (which is also when fit() can move the
+  /// buffer), a call that stored its results by list entry (recording), or contacts ended
+  /// behind the force loop's back (System::step_pair's undo restores an older history; a
+  /// caller that hands over a fresh buffer or restores a history sets it too). The force
+  /// loop then fills them with kNoPair before its sweep. From then on every pair that is
+  /// picked (in contact, or live before the call) writes its slot, its result when in
+  /// contact and kNoPair when not, so a slot whose pair is not in contact holds kNoPair.
   bool refill = true;
-  const PairResult* filled = nullptr;  ///< the buffer the slots were last filled in
   /// Per thread, during a force evaluation: the particles of its block left for after the
   /// barrier (the kernel shares them out evenly among the threads there).
   std::vector<DeferList> deferred;

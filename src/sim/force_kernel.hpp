@@ -156,10 +156,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       c.slots->fit(c.pair);
       res = c.pair.data();
       slot_of = c.slots->of.data();
-      if (c.slots->refill || c.slots->filled != res) {  // pairs not in contact: kNoPair (PairSlots::refill)
+      if (c.slots->refill) {  // pairs not in contact: kNoPair (PairSlots::refill)
         std::fill(res, res + c.slots->count, kNoPair);
         c.slots->refill = false;
-        c.slots->filled = res;
       }
     }
     if (c.slots->deferred.size() < size_t(nt)) c.slots->deferred.resize(size_t(nt));
