@@ -55,15 +55,6 @@ COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
 COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, long b) {
   return long(dep_lo[q]) >= a && long(q) < b;
 }
-/// Whether every partner of the rows [i0, i1] is local to the block [a, b), known without
-/// reading their dep_lo, given span >= q - dep_lo[q] for every particle q (PairSlots::span;
-/// a negative span: never). A partner q of row i has i <= q (each pair lies in the row of
-/// its lower index) and dep_lo[q] <= i; rows at least `span` past a give dep_lo[q] >=
-/// q - span >= i0 - span >= a, and rows ending more than `span` before b give q <= dep_lo[q]
-/// + span <= i1 + span < b.
-COHDEM_INLINE bool rows_all_local(long span, long i0, long i1, long a, long b) {
-  return span >= 0 && i0 >= a + span && i1 + span < b;
-}
 
 /// An allocator that leaves the elements a resize adds uninitialised (trivial types only
 /// here): a list made as long as it can get, filled through a pointer, then cut to its

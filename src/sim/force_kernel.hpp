@@ -447,15 +447,6 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // PairSlots::span of its start (i - dep_lo[i] <= span for every i); without a PairSlots,
     // any.
     const long head_end = share ? std::min(b, a + c.slots->span) : b;
-    // A batch of rows whose partners are all local to its piece (rows_all_local: those more
-    // than `span` rows from both of its ends) is swept as on one thread (kAllLocal): no
-    // locality test per contact, whose load of the partner's dep_lo was a scattered read of
-    // its own (the chute, blocks in series: about 25 us a step), and the same sums, every
-    // pair going to the reverse sums either way. Without a PairSlots (no span): never.
-    const long span_in = share ? c.slots->span : -1;
-    auto inner = [&](const long i0, const long i1, const long pa, const long pe) __attribute__((always_inline)) {
-      return rows_all_local(span_in, i0, i1, pa, pe);
-    };
     Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
     // next: the first particle of the block not yet finished or deferred. No particle depends
     // on a later row than its own, so every particle of the block is finished or deferred by
@@ -472,10 +463,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         long i1;
         uint32_t ke;
         batch_end(i, k, i1, ke);
-        if (!kAllLocal && inner(i, i1, a, b))
-          batch.template operator()<true>(i, i1, k, ke, a, b);
-        else
-          batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
+        batch.template operator()<kAllLocal>(i, i1, k, ke, a, b);
         i = i1;
         k = ke;
         // Every row of `next` is done and below b: local when none lies before a, which only
@@ -562,10 +550,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // finished, or (those before `head` that depend on rows before pa) deferred.
       auto advance = [&](Cursor& C, Drift& d, const long i1, const uint32_t ke, const long pa, const long pe,
                          const long head, uint32_t* dl, size_t& dn) __attribute__((always_inline)) {
-        if (!kAllLocal && inner(C.i, i1, pa, pe))
-          batch.template operator()<true>(C.i, i1, C.k, ke, pa, pe);
-        else
-          batch.template operator()<kAllLocal>(C.i, i1, C.k, ke, pa, pe);
+        batch.template operator()<kAllLocal>(C.i, i1, C.k, ke, pa, pe);
         C.i = i1;
         C.k = ke;
         if constexpr (!kAllLocal) {

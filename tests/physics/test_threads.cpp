@@ -613,64 +613,6 @@ TEST(Threads, GatheredPairsOfAParticleTakeOneRunOfSlots) {
   std::printf("[info] %zu pairs gathered through %zu runs of slots\n", all_stored, all_runs);
 }
 
-// The force loop sweeps a batch of rows with no locality test per contact where
-// rows_all_local says every partner of its rows is local to the piece (rows more than
-// PairSlots::span from both of its ends). Checked against the definition (local_to_block
-// with the partners' dep_lo) for every window of rows of every piece, in the flat box and
-// in the column (whose blocks hold several spans), on two and three threads, with and
-// without tails; the windows near the cuts do hold non-local partners, so the bound is
-// what keeps them out.
-TEST(Threads, RowsFarFromTheCutsHaveOnlyLocalPartners) {
-  size_t inner_windows = 0, inner_pairs = 0, outer_nonlocal = 0;
-  for (bool column : {false, true}) {
-    auto s = column ? make_box(1, false, {{"glass", 2500, 5e7, 0.25}}, 0, 0, 0.016, 0.1125) : make_box(1, false);
-    s->run(150);
-    const NeighborList& nl = s->nl;
-    const long n = long(s->particles.size());
-    long span = 0;  // the definition rows_all_local relies on
-    for (long i = 0; i < n; ++i) span = std::max(span, i - long(nl.dep_lo[size_t(i)]));
-    for (long nt : {2L, 3L}) {
-      for (bool tails : {false, true}) {
-        PairSlots ps;
-        ps.update(nl, n, nt, tails);
-        ASSERT_EQ(ps.span, span);
-        std::vector<long> cut{0};  // the pieces, as update() cuts them
-        for (long t = 0; t < nt; ++t) {
-          if (tails && ps.tail(t) > cut.back()) cut.push_back(ps.tail(t));
-          if (ps.bound[size_t(t + 1)] > cut.back()) cut.push_back(ps.bound[size_t(t + 1)]);
-        }
-        size_t wrong = 0;
-        for (size_t u = 0; u + 1 < cut.size(); ++u) {
-          const long pa = cut[u], pe = cut[u + 1];
-          for (long i0 = pa; i0 < pe; ++i0) {
-            for (long w : {0L, 3L, 40L}) {
-              const long i1 = std::min(pe - 1, i0 + w);
-              bool all = true;
-              size_t pairs = 0;
-              for (uint32_t k = nl.start[size_t(i0)]; k < nl.start[size_t(i1) + 1]; ++k, ++pairs)
-                all = all && local_to_block(nl.dep_lo.data(), nl.jdx[k], pa, pe);
-              if (rows_all_local(ps.span, i0, i1, pa, pe)) {
-                ++inner_windows;
-                inner_pairs += pairs;
-                wrong += !all;
-              } else {
-                outer_nonlocal += !all;
-              }
-            }
-          }
-        }
-        EXPECT_EQ(wrong, 0u) << (column ? "column" : "box") << ", " << nt << " threads, tails " << tails;
-      }
-    }
-  }
-  EXPECT_FALSE(rows_all_local(-1, 100, 100, 0, 1000));  // no span known: never
-  EXPECT_GT(inner_windows, 1000u);
-  EXPECT_GT(inner_pairs, 10000u);
-  EXPECT_GT(outer_nonlocal, 100u);
-  std::printf("[info] %zu windows of rows (%zu pairs) swept without locality tests; %zu near the cuts hold "
-              "non-local partners\n", inner_windows, inner_pairs, outer_nonlocal);
-}
-
 // The split follows measured sweep times (PairSlots::rebalance): a thread that took twice
 // as long per unit of modelled work gets a smaller share. The first two rebalances (after
 // 8 and 16 more calls) move the shares to their aim, the later ones (every kRebalanceCalls
