@@ -466,10 +466,13 @@ int run_case(Case c, const RunOptions& opt) {
   j["final_checkpoint_s"] = std::chrono::duration<double>(t_end - t_loop).count();
   j["particle_steps_per_s"] = loop_s > 0 ? double(particle_steps) / loop_s : 0.0;
   // System::step_pair: pairs of steps evaluated in one sweep, undone (a rebuild fell between
-  // them) and the steps taken again after those.
+  // them) and the steps taken again after those; of the pairs, those evaluated near a
+  // rebuild on the displacements' forecast, and the calls there that took plain steps.
   j["step_pairs"] = {{"pairs", s.pair_stats().pairs},
                      {"undone", s.pair_stats().replays},
-                     {"steps_taken_again", s.pair_stats().replayed_steps}};
+                     {"steps_taken_again", s.pair_stats().replayed_steps},
+                     {"forecast", s.pair_stats().forecast},
+                     {"near_plain", s.pair_stats().near_plain}};
   j["kinetic_energy"] = s.kinetic_energy();
   {  // flow observables of the free particles (benchmarks compare them with peer codes)
     double mfree = 0;

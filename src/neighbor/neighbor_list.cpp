@@ -622,6 +622,10 @@ bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>
 }
 
 bool NeighborList::rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const {
+  return rebuild_measure(d, walls) > skin;
+}
+
+double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& walls) const {
   // A pair can be missed only once the two particles have moved relative to each other by
   // more than the skin (less their radius growth). Their relative displacement is at most
   // twice the largest displacement, and at most the diagonal of the box that bounds all
@@ -639,10 +643,14 @@ bool NeighborList::rebuild_due(const Drift& d, const std::vector<Wall>& walls, d
     }
     rel = std::min(2 * dmax, norm(hi - lo));
   }
-  if (rel + 2 * d.grow > skin) return true;
-  for (size_t w = 0; w < walls.size(); ++w)
-    if (dmax + d.grow + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]) > skin) return true;
-  return false;
+  // A NaN bound (a particle gone NaN, which the run reports elsewhere) decides nothing, as
+  // a comparison with the skin it fails: the others decide.
+  double m = rel + 2 * d.grow;
+  for (size_t w = 0; w < walls.size(); ++w) {
+    const double b = dmax + d.grow + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]);
+    if (b > m || m != m) m = b;
+  }
+  return m;
 }
 
 size_t NeighborList::live_contacts() const {

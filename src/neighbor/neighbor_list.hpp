@@ -154,6 +154,10 @@ class NeighborList {
   /// The same decision from displacements reduced elsewhere (Drift, over every particle, from
   /// the reference below); walls are judged here. Needs has_reference(n).
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
+  /// What rebuild_due compares with the skin: the largest of the bound on two particles'
+  /// relative displacement (plus their radius growth) and each wall's bound, m; a rebuild is
+  /// due exactly when it exceeds the skin (System::step_pair forecasts it a step ahead).
+  double rebuild_measure(const Drift& d, const std::vector<Wall>& walls) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return ref_.x.size() == n; }
   /// Adds particle i's displacement and radius growth since the build to d (a frozen

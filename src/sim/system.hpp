@@ -55,9 +55,12 @@ struct SimConfig {
   /// `[simulation] pair_min`, and `pair_steps = false` for negative). The environment
   /// variable COHDEM_PAIR=0 turns it off too (for comparisons). Results are the same bits.
   long pair_min = 65536;
-  /// step_pair takes plain steps once the displacements since the lists' build reach this
-  /// fraction of what triggers a rebuild (a rebuild falling between the two steps of a pair
-  /// undoes the pair). 1: pairs up to the rebuild (tests use it to take the way back).
+  /// Below this fraction of what triggers a list rebuild (the displacements since the
+  /// build, NeighborList::rebuild_measure), step_pair evaluates pairs without looking ahead;
+  /// above it, only where the measure's growth over the last steps, four times over, stays
+  /// below the trigger for the pair's step (a rebuild falling between the two steps of a pair
+  /// undoes the pair; a snapshot is taken close to the trigger so that few steps are taken
+  /// again). 1: pairs up to the rebuild (tests use it to take the way back).
   double pair_margin = 0.75;
   /// Diagnostics: the force loop's blocks, split for omp_get_max_threads() threads as
   /// always, are swept one after another by the calling thread (the last block first, so
@@ -130,7 +133,8 @@ class System {
   /// on two threads). If
   /// the lists turn out to need a rebuild between the two steps, the state goes back to the
   /// last snapshot (taken after each list build and every 128 pairs) and the steps since are
-  /// taken again one at a time. Near a rebuild it takes plain steps.
+  /// taken again one at a time. Near a rebuild (SimConfig::pair_margin) it takes plain
+  /// steps unless the displacements' recent growth shows the pair's step stays clear of it.
   void step_pair();
   /// Whether step_pair can evaluate two steps in one sweep now (SimConfig::pair_min).
   bool pairs_allowed() const;
@@ -148,6 +152,9 @@ class System {
   /// between the two steps), and the steps taken again.
   struct PairStats {
     uint64_t pairs = 0, replays = 0, replayed_steps = 0;
+    /// Of the pairs, those evaluated past SimConfig::pair_margin on the forecast; and the
+    /// calls that took plain steps there instead.
+    uint64_t forecast = 0, near_plain = 0;
   };
   const PairStats& pair_stats() const { return pair_stats_; }
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
@@ -235,6 +242,17 @@ class System {
   };
   void take_snapshot();
   Snapshot snap_;
+  /// step_pair's forecast of NeighborList::rebuild_measure: its last value, the step whose
+  /// positions it measured, the lists' build it belongs to, and its growth per step over the
+  /// last two intervals between measurements (negative: not known yet).
+  struct Trend {
+    double m = 0, rate = -1, rate_before = -1;
+    uint64_t step = 0, builds = ~uint64_t(0);
+    void note(double m_now, uint64_t step_now, uint64_t builds_now);
+    /// The larger of the two growths (at least 0); negative while one is unknown.
+    double growth() const;
+  };
+  Trend trend_;
   PairStats pair_stats_;
   /// Moves the walls' geometry by one step (translation, oscillation, servo/lid travel) and
   /// records each wall's translation in wall_dx_; step_once carries attached particles.
