@@ -506,12 +506,13 @@ void System::step_pair() {
     return !slots_.chained;
   };
   // Past the margin, a pair only where the measure (NeighborList::rebuild_measure) plus
-  // kAhead times its growth per step over the last two intervals stays below the trigger:
+  // SimConfig::pair_ahead (4) times its growth per step over the last two intervals stays
+  // below the trigger:
   // the pair's first step moves the particles once more before its second step's forces
   // (at 10^6 particles on one thread the plain steps near each rebuild were a fifth of the
   // steps). Close to the trigger (within kClose steps of growth) the snapshot is renewed
   // every kCloseSnapPairs pairs, so that a pair undone there takes few steps again.
-  constexpr double kAhead = 4, kClose = 32;
+  constexpr double kClose = 32;
   constexpr uint64_t kCloseSnapPairs = 8;
   bool forecast = false, close = false;
   if (nl.stats.builds == builds) {  // no build in begin_step: the drift is since the last one
@@ -519,7 +520,7 @@ void System::step_pair() {
     trend_.note(m, step, nl.stats.builds);
     if (m > cfg.pair_margin * cfg.skin) {
       const double g = trend_.growth();
-      forecast = g >= 0 && m + kAhead * g <= cfg.skin;
+      forecast = g >= 0 && m + cfg.pair_ahead * g <= cfg.skin;
       close = forecast && m + kClose * g > cfg.skin;
       if (!forecast) {
         ++pair_stats_.near_plain;

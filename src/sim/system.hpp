@@ -62,6 +62,11 @@ struct SimConfig {
   /// undoes the pair; a snapshot is taken close to the trigger so that few steps are taken
   /// again). 1: pairs up to the rebuild (tests use it to take the way back).
   double pair_margin = 0.75;
+  /// Past pair_margin, how many steps of the measure's recent growth the forecast adds
+  /// before comparing with the trigger (the pair's step itself is one): 4 allows the growth
+  /// to quadruple from one step to the next. Tests set it below 1 to make forecasts fail
+  /// and take the way back.
+  double pair_ahead = 4;
   /// Diagnostics: the force loop's blocks, split for omp_get_max_threads() threads as
   /// always, are swept one after another by the calling thread (the last block first, so
   /// that each block's head is handed over before the block before needs it), where a

@@ -167,9 +167,11 @@ TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
         EXPECT_GT(b.pairs.replays, 0u) << what;  // ...some undone and taken again
       }
       EXPECT_LT(b.pairs.replays, b.pairs.pairs) << what;
-      std::printf("[info] %s: %llu builds, %llu pairs in one sweep, %llu undone (%llu steps taken again)\n",
+      std::printf("[info] %s: %llu builds, %llu pairs in one sweep (%llu on the forecast past the margin), %llu undone "
+                  "(%llu steps taken again)\n",
                   what.c_str(), (unsigned long long)a.builds, (unsigned long long)b.pairs.pairs,
-                  (unsigned long long)b.pairs.replays, (unsigned long long)b.pairs.replayed_steps);
+                  (unsigned long long)b.pairs.forecast, (unsigned long long)b.pairs.replays,
+                  (unsigned long long)b.pairs.replayed_steps);
     }
   });
 }
@@ -275,7 +277,7 @@ TEST(StepPair, ForceLoopRefusesASecondStepItCannotRun) {
 // few are. The states stay those of plain steps, bit for bit, and no pair is undone.
 TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
   omp_set_num_threads(1);
-  auto make = [] {
+  auto make = [](const double ahead) {
     auto s = make_system({{"glass", 2500, 5e7, 0.25}}, "linear", "none",
                          params({{"kn", 2e4}, {"e", 0.5}, {"mu", 0.5}}), 1e-5, {0, 0, 0}, 1e-3);
     Rng rng(11);
@@ -290,11 +292,12 @@ TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
           s->add_particle(0, 1e-3, {4e-3 * a, 4e-3 * b, 4e-3 * c}, v);
         }
     s->cfg.pair_min = 0;
+    s->cfg.pair_ahead = ahead;
     s->prepare();
     return s;
   };
   constexpr int kSteps = 601;
-  auto plain = make(), paired = make();
+  auto plain = make(4), paired = make(4);
   for (int k = 0; k < kSteps; ++k) plain->step_once(k + 1 < kSteps);
   paired->step_once(true);
   int k = 1;
@@ -323,4 +326,37 @@ TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
   std::printf("[info] %llu pairs, %llu on the forecast, %llu calls plain near the rebuild (step %llu)\n",
               (unsigned long long)st.pairs, (unsigned long long)st.forecast, (unsigned long long)st.near_plain,
               (unsigned long long)first_build_step);
+
+  // Forecasts that fail: with pair_ahead -1 the forecast lets every pair past the margin
+  // start (the measure less a step's growth is always below the trigger), so the pair
+  // whose second step's positions cross it is undone and its steps taken again from the
+  // snapshot, which close to the trigger (within 32 steps of growth) is renewed every 8
+  // pairs: at most 16 steps since it, and the two of the undone pair. Which step crosses
+  // (the 501st, or one either side with rounding) and which steps the pairs start on (one
+  // plain step first, or two) decide whether a pair straddles it: both starts are run, and
+  // one at least must take the way back. The states are still those of plain steps, bit
+  // for bit.
+  uint64_t undone = 0;
+  for (const int lead : {1, 2}) {
+    auto failing = make(-1);
+    k = 0;
+    while (k < lead) failing->step_once(++k < kSteps);
+    while (k + 2 < kSteps) {
+      failing->step_pair();
+      k += 2;
+    }
+    while (k < kSteps) failing->step_once(++k < kSteps);
+    const System::PairStats& sf = failing->pair_stats();
+    const std::string what = "lead " + std::to_string(lead);
+    EXPECT_TRUE(failing->particles.x == plain->particles.x) << what;
+    EXPECT_TRUE(failing->particles.v == plain->particles.v) << what;
+    EXPECT_EQ(failing->nl.stats.builds, plain->nl.stats.builds) << what;
+    EXPECT_LE(sf.replayed_steps, 18u * sf.replays) << what;
+    EXPECT_GE(sf.forecast, 55u) << what;
+    undone += sf.replays;
+    std::printf("[info] pair_ahead -1, %s: %llu pairs, %llu on the forecast, %llu undone (%llu steps taken again)\n",
+                what.c_str(), (unsigned long long)sf.pairs, (unsigned long long)sf.forecast,
+                (unsigned long long)sf.replays, (unsigned long long)sf.replayed_steps);
+  }
+  EXPECT_GE(undone, 1u);
 }
