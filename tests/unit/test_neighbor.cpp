@@ -187,6 +187,74 @@ TEST(NeighborList, RebuildCriterionIgnoresCommonTranslation) {
   EXPECT_TRUE(f.nl.needs_rebuild(f.p, {}, f.skin));
 }
 
+// NeighborList::rebuild_measure is the number the rebuild trigger compares with the skin
+// (System::step_pair forecasts it): checked against its definition on hand-made
+// displacements, and against rebuild_due on random ones, with and without a wall that has
+// moved since the build.
+TEST(NeighborList, RebuildMeasureIsWhatTheTriggerComparesWithTheSkin) {
+  Bed b(true, 41);
+  const double s = b.skin;
+  // One particle moved by 0.3 skin along x, the others at rest: the largest displacement
+  // is 0.3 skin, the displacements' box 0.3 skin long, so two particles moved by at most
+  // min(2 x 0.3, 0.3) = 0.3 skin relative to each other.
+  Drift d;
+  for (size_t i = 0; i < b.p.size(); ++i) d.add(Vec3{i == 3 ? 0.3 * s : 0.0, 0, 0});
+  EXPECT_DOUBLE_EQ(b.nl.rebuild_measure(d, {}), 0.3 * s);
+  // Everyone moved by the same 0.7 skin: nothing moved relative to anything (box of size 0)...
+  Drift t;
+  for (size_t i = 0; i < b.p.size(); ++i) t.add(Vec3{0, 0.7 * s, 0});
+  EXPECT_EQ(b.nl.rebuild_measure(t, {}), 0.0);
+  // ...unless a particle is frozen: the box holds the origin, 0.7 skin long.
+  t.frozen = true;
+  EXPECT_DOUBLE_EQ(b.nl.rebuild_measure(t, {}), 0.7 * s);
+  // Radius growth counts twice (both particles of a pair may have grown).
+  Drift g = d;
+  g.grow = 0.05 * s;
+  EXPECT_DOUBLE_EQ(b.nl.rebuild_measure(g, {}), 0.3 * s + 0.1 * s);
+
+  // With a wall (a floor, built with the lists), the absolute displacement counts against it:
+  // the common translation of 0.7 skin is 0.7 skin towards or away from the wall, plus the
+  // wall's own motion along its normal since the build.
+  Wall floor;
+  floor.shape = WallShape::Plane;
+  floor.point = {0, 0, -0.01};
+  floor.normal = {0, 0, 1};
+  std::vector<Wall> walls{floor};
+  NeighborList nw;
+  nw.hist.stride = nw.whist.stride = 8;
+  nw.build(b.p, walls, b.d, s, 0.0, false);
+  Drift t2;
+  for (size_t i = 0; i < b.p.size(); ++i) t2.add(Vec3{0, 0.7 * s, 0});
+  EXPECT_DOUBLE_EQ(nw.rebuild_measure(t2, walls), 0.7 * s);
+  walls[0].point += Vec3{0.1 * s, 0, 0.2 * s};  // moved 0.2 skin along its normal
+  EXPECT_DOUBLE_EQ(nw.rebuild_measure(t2, walls), 0.7 * s + 0.2 * s);
+
+  // Random displacements (some particles frozen, some grown), with and without the moved
+  // wall: rebuild_due is exactly the measure above the skin, for skins on both sides.
+  Rng rng(5);
+  int due = 0, not_due = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Drift r;
+    const double amp = s * rng.uniform(0, 1.5);
+    for (size_t i = 0; i < 50; ++i)
+      r.add(Vec3{amp * rng.uniform(-1, 1), amp * rng.uniform(-1, 1), amp * rng.uniform(-1, 1)},
+            trial % 4 == 0 ? 0.1 * s * rng.uniform() : 0.0);
+    r.frozen = trial % 3 == 0;
+    for (const bool with_wall : {false, true}) {
+      const std::vector<Wall>& w = with_wall ? walls : std::vector<Wall>{};
+      const NeighborList& nl = with_wall ? nw : b.nl;
+      const double m = nl.rebuild_measure(r, w);
+      for (const double skin : {0.5 * s, s, 2 * s, m, std::nextafter(m, 0.0)}) {
+        const bool want = m > skin;
+        EXPECT_EQ(nl.rebuild_due(r, w, skin), want) << "trial " << trial << ", skin " << skin;
+        (want ? due : not_due) += 1;
+      }
+    }
+  }
+  EXPECT_GT(due, 100);
+  EXPECT_GT(not_due, 100);
+}
+
 TEST(NeighborList, RebuildCriterionNeverMissesAContact) {
   // Adversarial trials: a common drift of up to 10 skins, small jitter for everyone, and one
   // unlisted pair (the closest: gap >= skin at the build) driven together by 0.8 to 1.3 times
