@@ -507,11 +507,10 @@ void System::step_pair() {
   };
   // Past the margin, a pair only where the measure (NeighborList::rebuild_measure) plus
   // SimConfig::pair_ahead (4) times its growth per step over the last two intervals stays
-  // below the trigger:
-  // the pair's first step moves the particles once more before its second step's forces
-  // (at 10^6 particles on one thread the plain steps near each rebuild were a fifth of the
-  // steps). Close to the trigger (within kClose steps of growth) the snapshot is renewed
-  // every kCloseSnapPairs pairs, so that a pair undone there takes few steps again.
+  // below the trigger: the pair's first step moves the particles once more before its second
+  // step's forces (at 10^6 particles on one thread the plain steps near each rebuild were a
+  // fifth of the steps). Close to the trigger (within kClose steps of growth) the snapshot is
+  // renewed every kCloseSnapPairs pairs, so that a pair undone there takes few steps again.
   constexpr double kClose = 32;
   constexpr uint64_t kCloseSnapPairs = 8;
   bool forecast = false, close = false;
