@@ -513,7 +513,7 @@ void System::step_pair() {
   // renewed every kCloseSnapPairs pairs, so that a pair undone there takes few steps again.
   constexpr double kClose = 32;
   constexpr uint64_t kCloseSnapPairs = 8;
-  bool forecast = false, close = false;
+  bool forecast = false, close = false, near = false;
   if (nl.stats.builds == builds) {  // no build in begin_step: the drift is since the last one
     const double m = nl.rebuild_measure(open_drift_, walls);
     trend_.note(m, step, nl.stats.builds);
@@ -521,16 +521,11 @@ void System::step_pair() {
       const double g = trend_.growth();
       forecast = g >= 0 && m + cfg.pair_ahead * g <= cfg.skin;
       close = forecast && m + kClose * g > cfg.skin;
-      if (!forecast) {
-        ++pair_stats_.near_plain;
-        snap_.valid = false;
-        end_step(true);
-        step_once(true);
-        return;
-      }
+      near = !forecast;
     }
   }
-  if (short_blocks()) {
+  if (near || short_blocks()) {
+    pair_stats_.near_plain += near;
     snap_.valid = false;
     end_step(true);
     step_once(true);

@@ -297,18 +297,25 @@ TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
     return s;
   };
   constexpr int kSteps = 601;
+  // kSteps steps: `lead` plain ones, then pairs, the rest plain (the last one closed); the
+  // step after the call in which the lists were first rebuilt.
+  auto drive = [](System& s, const int lead) {
+    const uint64_t builds0 = s.nl.stats.builds;
+    uint64_t first_build_step = 0;
+    int k = 0;
+    while (k < lead) s.step_once(++k < kSteps);
+    while (k + 2 < kSteps) {
+      s.step_pair();
+      k += 2;
+      if (first_build_step == 0 && s.nl.stats.builds > builds0) first_build_step = s.step;
+    }
+    while (k < kSteps) s.step_once(++k < kSteps);
+    return first_build_step;
+  };
   auto plain = make(4), paired = make(4);
   for (int k = 0; k < kSteps; ++k) plain->step_once(k + 1 < kSteps);
-  paired->step_once(true);
-  int k = 1;
-  uint64_t first_build_step = 0;
   const uint64_t builds0 = paired->nl.stats.builds;
-  while (k + 2 < kSteps) {
-    paired->step_pair();
-    k += 2;
-    if (first_build_step == 0 && paired->nl.stats.builds > builds0) first_build_step = paired->step;
-  }
-  while (k < kSteps) paired->step_once(++k < kSteps);
+  const uint64_t first_build_step = drive(*paired, 1);
   const System::PairStats& st = paired->pair_stats();
   EXPECT_EQ(paired->step, plain->step);
   EXPECT_TRUE(paired->particles.x == plain->particles.x);
@@ -339,13 +346,7 @@ TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
   uint64_t undone = 0;
   for (const int lead : {1, 2}) {
     auto failing = make(-1);
-    k = 0;
-    while (k < lead) failing->step_once(++k < kSteps);
-    while (k + 2 < kSteps) {
-      failing->step_pair();
-      k += 2;
-    }
-    while (k < kSteps) failing->step_once(++k < kSteps);
+    drive(*failing, lead);
     const System::PairStats& sf = failing->pair_stats();
     const std::string what = "lead " + std::to_string(lead);
     EXPECT_TRUE(failing->particles.x == plain->particles.x) << what;
