@@ -599,9 +599,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         while (B.i < tb) {
           if (b_need < 0) {
             batch_end(B.i, B.k, b_i1, b_ke, tb);
-            uint32_t top = uint32_t(std::min(b_i1, tb - 1));
-            for (uint32_t k = B.k; k < b_ke; ++k) top = std::max(top, jdx[k]);
-            b_need = long(top);
+            const uint32_t row = uint32_t(std::min(b_i1, tb - 1));
+            b_need = long(simd ? max_index_avx2(jdx + B.k, b_ke - B.k, row) : max_index_scalar(jdx + B.k, b_ke - B.k, row));
           }
           if (b_need >= tb ? !a_done : b_need >= A.next) return;
           advance(B, drift_b, b_i1, b_ke, a, tb, hd, own_p, own_n);

@@ -119,6 +119,20 @@ COHDEM_INLINE uint32_t screen_scalar(const ScreenInput& s, const long i0, const 
 /// only; call it only when screen_avx2_enabled()).
 uint32_t screen_avx2(const ScreenInput& s, long i0, long i1, long b, uint32_t kb, uint32_t ke, ScreenHits& h);
 
+/// The largest of p[0..n), at least `floor`, without a branch per element (a running
+/// maximum compiled as compare and branch mispredicts on about every other entry of a list
+/// row). Four independent maxima, so that the selects do not wait on each other.
+COHDEM_INLINE uint32_t max_index_scalar(const uint32_t* p, const uint32_t n, const uint32_t floor) {
+  uint32_t m[4] = {floor, floor, floor, floor};
+  uint32_t q = 0;
+  for (; q + 4 <= n; q += 4)
+    for (uint32_t l = 0; l < 4; ++l) m[l] = p[q + l] > m[l] ? p[q + l] : m[l];
+  for (; q < n; ++q) m[0] = p[q] > m[0] ? p[q] : m[0];
+  return std::max(std::max(m[0], m[1]), std::max(m[2], m[3]));
+}
+/// The same, eight at a time in AVX2 registers (call it only when screen_avx2_enabled()).
+uint32_t max_index_avx2(const uint32_t* p, uint32_t n, uint32_t floor);
+
 /// Whether the force loops screen with AVX2: the CPU has it, the build is for x86-64, and
 /// the environment does not say COHDEM_SIMD=0 (for comparisons; read once).
 bool screen_avx2_enabled();

@@ -172,6 +172,16 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   return nh;
 }
 
+__attribute__((target("avx2"))) uint32_t max_index_avx2(const uint32_t* p, const uint32_t n, const uint32_t floor) {
+  __m256i m = _mm256_set1_epi32(int32_t(floor));
+  uint32_t q = 0;
+  for (; q + 8 <= n; q += 8) m = _mm256_max_epu32(m, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + q)));
+  __m128i h = _mm_max_epu32(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
+  h = _mm_max_epu32(h, _mm_shuffle_epi32(h, _MM_SHUFFLE(1, 0, 3, 2)));
+  h = _mm_max_epu32(h, _mm_shuffle_epi32(h, _MM_SHUFFLE(2, 3, 0, 1)));
+  return max_index_scalar(p + q, n - q, uint32_t(_mm_cvtsi128_si32(h)));
+}
+
 bool screen_avx2_enabled() {
   if (g_avx2 < 0) {
     const char* e = std::getenv("COHDEM_SIMD");
@@ -188,6 +198,9 @@ bool avx2_available() { return __builtin_cpu_supports("avx2"); }
 uint32_t screen_avx2(const ScreenInput& s, const long i0, const long i1, const long b, const uint32_t kb,
                      const uint32_t ke, ScreenHits& h) {
   return screen_scalar(s, i0, i1, b, kb, ke, h);
+}
+uint32_t max_index_avx2(const uint32_t* p, const uint32_t n, const uint32_t floor) {
+  return max_index_scalar(p, n, floor);
 }
 bool screen_avx2_enabled() { return false; }
 void set_screen_avx2(bool) { g_avx2 = 0; }

@@ -7,6 +7,7 @@
 // block's end and reach the list's end (whose last entries the AVX2 path screens singly).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -138,4 +139,29 @@ TEST(Screening, ListEndScreenedSingly) {
     L.live.assign(len, 1);
     EXPECT_EQ(compare_batch(L, 0, 3, 4, 0, len), len);
   }
+}
+
+TEST(Screening, MaxIndexIsTheLargestEntryOrTheFloor) {
+  // The two-step sweep's wait (force_kernel.hpp, run_b): the highest partner of a batch, at
+  // least its last row. Both versions against std::max_element on random indices over the
+  // whole uint32 range (the AVX2 one compares unsigned: values above 2^31 must not read as
+  // negative), for every length 0-40 (its eight-wide part, then the rest singly) and for a
+  // floor below, inside and above the entries' range.
+  Rng rng(77);
+  std::vector<uint32_t> p(48);
+  size_t checked = 0;
+  for (int rep = 0; rep < 50; ++rep) {
+    const bool wide = rep % 2 == 0;
+    for (uint32_t& e : p) e = wide ? uint32_t(rng.next()) : uint32_t(rng.next() % 1000);
+    for (uint32_t n = 0; n <= 40; ++n) {
+      const uint32_t top = n == 0 ? 0 : *std::max_element(p.begin(), p.begin() + n);
+      for (const uint32_t floor : {0u, 500u, 0xFFFFFFF0u}) {
+        const uint32_t want = std::max(top, floor);
+        EXPECT_EQ(max_index_scalar(p.data(), n, floor), want) << "n " << n << " floor " << floor;
+        if (avx2_available()) EXPECT_EQ(max_index_avx2(p.data(), n, floor), want) << "n " << n << " floor " << floor;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 50u * 41u * 3u);
 }
