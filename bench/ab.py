@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A/B timing of two cohdem binaries (or two environments of one) on one case, the way the
-rounds in docs/performance.md ("What was changed for speed") measure each change.
+rounds in docs/performance-history.md ("What was changed for speed") measure each change.
 
   python3 bench/ab.py CASE --a OLD/cohdem --b build/cohdem --duration 0.5 --rounds 10
   python3 bench/ab.py CASE --a build/cohdem --env-b "COHDEM_SIMD=0" --rounds 8

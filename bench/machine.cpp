@@ -1,5 +1,5 @@
 // Probes of the machine, not of cohdem. They explain costs seen in whole runs
-// (docs/performance.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
+// (docs/performance-history.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
 // machine before a benchmark session.
 //
 //   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|RemoteLines|OmpSync|Streams'
@@ -173,7 +173,7 @@ BENCHMARK(BM_CoreToCore)->Unit(benchmark::kMicrosecond)->UseRealTime();
 // back. What the force loop pays for the particles at a block boundary, which both cores
 // touch every step, follows it. On the forty-third round's Zen 3 VM it took one of two values
 // that the host switched between every few tens of seconds, 18-24 ns and 65-80 ns ("the
-// host's placement of the two vCPUs"; docs/performance.md, forty-third and forty-fourth rounds:
+// host's placement of the two vCPUs"; docs/performance-history.md, forty-third and forty-fourth rounds:
 // the chute's block-boundary finishing 21-25 against 46-50 us a step); bench/scaling.py
 // --placement reads it before and after each two-thread run.
 void BM_RemoteLines(benchmark::State& st) {

@@ -59,7 +59,7 @@ written by the other core costs (cohdem_bench's BM_RemoteLines, a fraction of a 
 the development VM it takes one of two values, which the host switches between every few tens
 of seconds (about 19 and 70 ns on the forty-third round's Zen 3), and every line the two
 threads pass at their blocks' boundary pays it, so the two-thread rate follows it while
-one-thread runs and two independent runs do not (docs/performance.md, forty-third and
+one-thread runs and two independent runs do not (docs/performance-history.md, forty-third and
 forty-fourth rounds). A table then gives the two-thread speed-up apart for the runs with both
 readings below --placement-split ns ("near") and both above ("far"); runs with one of each
 are counted as mixed.

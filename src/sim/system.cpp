@@ -392,7 +392,7 @@ bool System::serial_blocks_by_env() {
 
 bool System::pairs_fit_size() const {
   // pair_min particles per thread: on the development VM, two threads gained about 4 %
-  // at 10^6 particles and lost about 11 % at 10^5 (docs/performance.md, thirty-fifth round).
+  // at 10^6 particles and lost about 11 % at 10^5 (docs/performance-history.md, thirty-fifth round).
   const long n = long(particles.size()), nt = n > cfg.parallel_min ? long(omp_get_max_threads()) : 1;
   return cfg.pair_min >= 0 && n >= cfg.pair_min * nt;
 }

@@ -72,7 +72,7 @@ struct SimConfig {
   /// that each block's head is handed over before the block before needs it), where a
   /// call ends without the barrier (PairSlots::chained). The same bits as the threads; its
   /// `thread_sweep` then gives the split's own cost with no second core (no lines moving
-  /// between caches, no waits; docs/performance.md, forty-third round). Two steps in one
+  /// between caches, no waits; docs/performance-history.md, forty-third round). Two steps in one
   /// sweep are off with it. The environment variable COHDEM_SERIAL_BLOCKS=1 turns it on.
   bool serial_blocks = false;
 };

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The force loops keep their contact law inline (docs/performance.md, eighth round): GCC's
+# The force loops keep their contact law inline (docs/performance-history.md, eighth round): GCC's
 # inliner gives up inside the kernels' large OpenMP functions, and a restructured loop once
 # left ContactLaw::evaluate, then every sub-model, as calls (3-10 % of a chute's speed, and
 # nothing else showed it). This lists the calls in each `compute(...) [clone ._omp_fn.N]`
