@@ -8,6 +8,8 @@
 
 #include "core/error.hpp"
 #include "core/grow.hpp"
+#include "neighbor/search.hpp"
+#include "sim/screen.hpp"  // screen_avx2_enabled: the one switch of the AVX2 code (COHDEM_SIMD)
 
 namespace cohdem {
 
@@ -120,7 +122,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     for (size_t i = 0; i < n; ++i) cell_of_[i] = uint32_t(cell_index(p.x[i]));
     for (size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
     for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
-    cell_list_.resize(n);
+    cell_list_.reserve(n + kSearchPad);  // exactly (the AVX2 search's padding below; a resize past
+    cell_list_.resize(n);                // the capacity would double it)
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
     for (size_t i = 0; i < n; ++i) cell_list_[fill_[cell_of_[i]]++] = uint32_t(i);
   };
@@ -139,6 +142,49 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       for (int sz = -1; sz <= 1; ++sz)
         shift[(sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)] = {sx * L.x, sy * L.y, sz * L.z};
 
+  // The candidates' positions, radii and fixed flags in cell order, for the AVX2 search
+  // (search.hpp): a range of candidates is then one contiguous run of each, read four at a
+  // time. Padded past the end (kSearchPad) with entries that are never picked. 33 bytes a
+  // particle, needed during the search only: they are kept in the pair history's storage,
+  // whose records were copied out above (keep_live_pairs) and which is cleared for the new
+  // lists below (step 6), where it is large enough (a list of 3.5 entries a particle holds
+  // 84 bytes a particle with the linear law's 24-byte records); else (the first build) in
+  // memory of their own, freed after the search. (Kept between builds in arrays of their
+  // own, they raised the chute's peak memory by 5 %.)
+  const bool simd = screen_avx2_enabled();
+  SearchInput sin{};
+  std::vector<double> soa;  // only where the history's storage is too small
+  if (simd) {
+    const size_t m = n + kSearchPad, words = 4 * m + (m + 7) / 8;
+    double* sx = nullptr;
+    if (hist.data.size() >= (words + 4) * sizeof(double)) {
+      uintptr_t at = reinterpret_cast<uintptr_t>(hist.data.data());
+      at = (at + 31) & ~uintptr_t(31);
+      sx = reinterpret_cast<double*>(at);
+    } else {
+      soa.resize(words);
+      sx = soa.data();
+    }
+    uint8_t* const sf = reinterpret_cast<uint8_t*>(sx + 4 * m);
+    cell_list_.resize(m);
+    uint32_t* const cl = cell_list_.data();
+#pragma omp parallel for schedule(static) if (long(n) > parallel_min)
+    for (size_t t = 0; t < n; ++t) {
+      const uint32_t b = cl[t];
+      sx[t] = p.x[b].x;
+      sx[m + t] = p.x[b].y;
+      sx[2 * m + t] = p.x[b].z;
+      sx[3 * m + t] = p.radius[b];
+      sf[t] = p.flag[b] != kFree;
+    }
+    for (size_t t = n; t < m; ++t) {
+      sx[t] = sx[m + t] = sx[2 * m + t] = sx[3 * m + t] = 0.0;
+      sf[t] = 0;
+      cl[t] = 0;
+    }
+    sin = {sx, sx + m, sx + 2 * m, sx + 3 * m, sf, cl, shift.data()};
+  }
+
   // 4. Pairs, by a half stencil: each particle a (cells in order, a cell's particles in
   //    order) tests the particles after it in its own cell and those of the 13 cells ahead
   //    of its cell (x + 1, the row above, the plane above; each with its periodic image), so
@@ -153,6 +199,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   //    of the higher seen from there: the pairs are keyed (lower, higher) in the order they
   //    are found, then counted into rows and placed in that order. Row order: the order of
   //    the search.
+  //    With AVX2 (screen_avx2_enabled), each particle's candidates are tested four at a time
+  //    from the copies in cell order above (search_avx2: the same arithmetic, keys, images
+  //    and order as the loop below, so the same lists; chute build 1.21x, forty-ninth round
+  //    in docs/performance-history.md).
   //    Parallel: the cells are cut into chunks of about equal particle counts, several per
   //    thread, taken by the threads as they come free (cells differ in cost: a chute's dense
   //    flow against its frozen base, a bed's floor against its free surface); the chunks'
@@ -261,7 +311,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
         uint32_t total = rq1[0] - cs[c];
         for (int r = 1; r < nr; ++r) total += rq1[r] - rq0[r];
         for (uint32_t q = cs[c]; q < cs[c + 1]; ++q) {
-          if (cnt + total > key.size()) {  // room for every candidate of a
+          if (cnt + total + kSearchPad > key.size()) {  // room for every candidate of a (and the AVX2 search's last group)
             const size_t m = std::max<size_t>(2 * key.size(), cnt + total + 1024);
             key.resize(m);
             image.resize(m);
@@ -273,6 +323,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
           const Vec3 xa = x[a];
           const double ra = rad[a] + skin + reach;
           rq0[0] = q + 1;
+          if (simd) {
+            cnt = search_avx2(sin, a, xa, ra, fixed_a, nr, rq0, rq1, rimg, kout, iout, cnt);
+            continue;
+          }
           size_t k = cnt;
           for (int r = 0; r < nr; ++r) {
             const uint8_t img = rimg[r], back = uint8_t(26 - img);  // back: a seen from b
@@ -307,6 +361,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       key.swap(tl_key_[ch]);
       image.swap(tl_img_[ch]);
     }
+    std::vector<double>().swap(soa);  // before the rows and the history take their memory
     // Rows: counted, then filled in the order the pairs were found (chunk after chunk). The
     // same pass counts the transposed rows and finds each particle's lowest row (dep_lo).
     // Then the transposed slots, in ascending list order per particle.

@@ -11,6 +11,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "core/pack_table.hpp"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -22,29 +24,6 @@ namespace {
 std::atomic<int> g_avx2{-1};  // -1: not decided yet (read by every force call)
 
 #if defined(__x86_64__)
-/// For each 4-bit mask of picked lanes, the lanes in ascending order, then lane 0 again:
-/// as 32-bit halves for vpermps on doubles, and as bytes for pshufb on 32-bit entries.
-struct PackTable {
-  alignas(32) int32_t dbl[16][8];
-  alignas(16) uint8_t u32[16][16];
-};
-constexpr PackTable make_pack_table() {
-  PackTable t{};
-  for (int m = 0; m < 16; ++m) {
-    int n = 0;
-    std::array<int, 4> lanes{0, 0, 0, 0};
-    for (int l = 0; l < 4; ++l)
-      if (m & (1 << l)) lanes[size_t(n++)] = l;
-    for (int o = 0; o < 4; ++o) {
-      const int l = lanes[size_t(o)];
-      t.dbl[m][2 * o] = 2 * l;
-      t.dbl[m][2 * o + 1] = 2 * l + 1;
-      for (int b = 0; b < 4; ++b) t.u32[m][4 * o + b] = uint8_t(4 * l + b);
-    }
-  }
-  return t;
-}
-constexpr PackTable kPack = make_pack_table();
 
 /// Stores the lanes of v in the order of the permutation p (32-bit halves) at dst.
 __attribute__((target("avx2"), always_inline)) inline void put_packed(double* dst, const __m256d v, const __m256i p) {

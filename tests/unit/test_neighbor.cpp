@@ -3,6 +3,7 @@
 // with and without periodic directions, and after re-sorting.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -10,6 +11,7 @@
 
 #include "core/rng.hpp"
 #include "neighbor/neighbor_list.hpp"
+#include "sim/screen.hpp"
 
 using namespace cohdem;
 
@@ -39,13 +41,19 @@ std::map<std::pair<uint64_t, uint64_t>, double> brute(const ParticleStore& p, co
   return m;
 }
 
-void check(bool periodic, bool resort) {
-  const double L = 0.02, skin = 2e-4;
-  ParticleStore p = random_particles(1500, L, 2.5e-4, 7.5e-4, periodic ? 3 : 4);  // size ratio 3
+// A cube of side L from the origin, periodic where asked.
+Domain cube(const double L, const std::array<bool, 3> periodic) {
   Domain d;
   d.lo = {0, 0, 0};
   d.hi = {L, L, L};
-  d.periodic = {periodic, periodic, false};
+  d.periodic = periodic;
+  return d;
+}
+
+void check(bool periodic, bool resort) {
+  const double L = 0.02, skin = 2e-4;
+  ParticleStore p = random_particles(1500, L, 2.5e-4, 7.5e-4, periodic ? 3 : 4);  // size ratio 3
+  const Domain d = cube(L, {periodic, periodic, false});
   NeighborList nl;
   nl.hist.stride = nl.whist.stride = 8;
   nl.build(p, {}, d, skin, 0.0, resort);
@@ -72,6 +80,32 @@ void check(bool periodic, bool resort) {
   EXPECT_EQ(nl.rpair.size(), nl.jdx.size());
 }
 
+// A box periodic in x and z, ncut cutoffs long there (one to four cells across), 12 mm in y,
+// with n polydisperse spheres (radii 0.25-0.75 mm, ids from id0 down by step), one in ten
+// frozen.
+struct NarrowBox {
+  ParticleStore p;
+  Domain d;
+  double skin = 2e-4;
+};
+NarrowBox narrow_box(const double ncut, const uint64_t seed, const size_t n_or_0, const uint64_t id0,
+                     const uint64_t step) {
+  NarrowBox b;
+  const double rmax = 7.5e-4, cut = 2 * rmax + b.skin;
+  const Vec3 L{ncut * cut, 0.012, ncut * cut};
+  Rng rng(seed);
+  // By default four times the density of the bed above.
+  const size_t n = n_or_0 > 0 ? n_or_0 : size_t(6000 * L.x * L.y * L.z / (0.02 * 0.02 * 0.02)) + 40;
+  for (size_t i = 0; i < n; ++i) {
+    b.p.add(id0 - step * i, 0, rng.uniform(2.5e-4, rmax), 1000, {rng.uniform(0, L.x), rng.uniform(0, L.y), rng.uniform(0, L.z)});
+    if (i % 10 == 3) b.p.flag[i] = kFrozen;
+  }
+  b.d.lo = {0, 0, 0};
+  b.d.hi = L;
+  b.d.periodic = {true, false, true};
+  return b;
+}
+
 // Every image: in a periodic direction only 1.2 to 4.5 cutoffs long, one or two cells wide
 // (a cell's neighbours at -1 and +1 are then one cell under two images, each searched once)
 // or three and four (each pair of cells searched once, from the cell behind). A pair of particles
@@ -80,19 +114,12 @@ void check(bool periodic, bool resort) {
 // listed. Compared as multisets of (lower id, higher id, distance to 1e-12 m) against all
 // pairs and images by brute force.
 void check_images(const double ncut, const bool resort) {
-  const double skin = 2e-4, rmax = 7.5e-4, cut = 2 * rmax + skin;
-  const Vec3 L{ncut * cut, 0.012, ncut * cut};
-  ParticleStore p;
-  Rng rng(uint64_t(ncut * 10) + resort);
-  const size_t n = size_t(6000 * L.x * L.y * L.z / (0.02 * 0.02 * 0.02)) + 40;  // four times the bed above
-  for (size_t i = 0; i < n; ++i) {
-    p.add(5000 - 3 * i, 0, rng.uniform(2.5e-4, rmax), 1000, {rng.uniform(0, L.x), rng.uniform(0, L.y), rng.uniform(0, L.z)});
-    if (i % 10 == 3) p.flag[i] = kFrozen;
-  }
-  Domain d;
-  d.lo = {0, 0, 0};
-  d.hi = L;
-  d.periodic = {true, false, true};
+  NarrowBox box = narrow_box(ncut, uint64_t(ncut * 10) + resort, 0, 5000, 3);
+  ParticleStore& p = box.p;
+  const Domain& d = box.d;
+  const double skin = box.skin;
+  const Vec3 L = d.hi;
+  const size_t n = p.size();
   NeighborList nl;
   nl.hist.stride = nl.whist.stride = 8;
   nl.build(p, {}, d, skin, 0.0, resort);
@@ -135,6 +162,51 @@ TEST(NeighborList, EveryImageInNarrowPeriodicBoxes) {
 }
 TEST(NeighborList, MatchesBruteForcePeriodic) { check(true, false); }
 TEST(NeighborList, MatchesBruteForceAfterResort) { check(true, true); }
+
+// The pair search four candidates at a time (AVX2, src/neighbor/search_avx2.cpp) and the
+// portable loop give the same lists bit for bit: the same rows, partners, images and
+// transposed index, in the same order. Boxes as above (one particle in ten frozen, periodic
+// in x and z, one to four cells across), and a polydisperse bed re-sorted, then moved by up
+// to half a cell so that the cell order is no longer the index order (candidates ahead of a
+// particle then include lower indices, whose pairs go to the other row, seen from there).
+TEST(NeighborList, Avx2SearchGivesThePortableListsBitForBit) {
+  if (!avx2_available()) GTEST_SKIP() << "this CPU has no AVX2";
+  const bool was = screen_avx2_enabled();
+  auto lists = [](ParticleStore p, const Domain& d, const double skin, const bool resort, const bool avx2) {
+    set_screen_avx2(avx2);
+    NeighborList nl;
+    nl.hist.stride = nl.whist.stride = 8;
+    nl.build(p, {}, d, skin, 0.0, resort);
+    return std::make_tuple(nl.start, nl.jdx, nl.image, nl.rstart, nl.rpair, nl.dep_lo, p.id);
+  };
+  size_t cases = 0;
+  for (const double ncut : {1.2, 2.5, 4.5}) {
+    const NarrowBox box = narrow_box(ncut, uint64_t(ncut * 10) + 77, 1500, 9000, 5);
+    const ParticleStore& p = box.p;
+    for (const bool resort : {false, true}) {
+      const auto a = lists(p, box.d, box.skin, resort, false), b = lists(p, box.d, box.skin, resort, true);
+      EXPECT_TRUE(a == b) << ncut << " cutoffs, resort " << resort;
+      EXPECT_GT(std::get<1>(a).size(), p.size() / 2);
+      ++cases;
+    }
+  }
+  {
+    const double L = 0.02, skin = 2e-4;
+    ParticleStore p = random_particles(3000, L, 2.5e-4, 7.5e-4, 5);
+    const Domain d = cube(L, {true, false, false});
+    NeighborList sorter;
+    sorter.hist.stride = sorter.whist.stride = 8;
+    sorter.build(p, {}, d, skin, 0.0, true);  // cell order = index order
+    Rng rng(6);
+    for (Vec3& x : p.x) x = x + Vec3{rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4)};
+    const auto a = lists(p, d, skin, false, false), b = lists(p, d, skin, false, true);
+    EXPECT_TRUE(a == b) << "moved bed";
+    EXPECT_GT(std::get<1>(a).size(), p.size());
+    ++cases;
+  }
+  set_screen_avx2(was);
+  EXPECT_EQ(cases, 7u);
+}
 
 // The rebuild criterion bounds the relative displacement of any two particles by the smaller
 // of twice the largest displacement and the diagonal of the displacements' bounding box
