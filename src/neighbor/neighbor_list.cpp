@@ -142,10 +142,9 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       for (int sz = -1; sz <= 1; ++sz)
         shift[(sx + 1) * 9 + (sy + 1) * 3 + (sz + 1)] = {sx * L.x, sy * L.y, sz * L.z};
 
-  // The candidates' positions, radii and fixed flags in cell order, for the AVX2 search
-  // (search.hpp): a range of candidates is then one contiguous run of each, read four at a
-  // time. Padded past the end (kSearchPad) with entries that are never picked. 33 bytes a
-  // particle, needed during the search only: they are kept in the pair history's storage,
+  // The candidates' positions and radii in cell order, for the AVX2 search (search.hpp): a
+  // range of candidates is then one contiguous run of each, read four at a time. Padded past
+  // the end (kSearchPad) with entries that are never picked. 32 bytes a particle, needed during the search only: they are kept in the pair history's storage,
   // whose records were copied out above (keep_live_pairs) and which is cleared for the new
   // lists below (step 6), where it is large enough (a list of 3.5 entries a particle holds
   // 84 bytes a particle with the linear law's 24-byte records); else (the first build) in
@@ -155,7 +154,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   SearchInput sin{};
   std::vector<double> soa;  // only where the history's storage is too small
   if (simd) {
-    const size_t m = n + kSearchPad, words = 4 * m + (m + 7) / 8;
+    const size_t m = n + kSearchPad, words = 4 * m;
     double* sx = nullptr;
     if (hist.data.size() >= (words + 4) * sizeof(double)) {
       uintptr_t at = reinterpret_cast<uintptr_t>(hist.data.data());
@@ -165,7 +164,6 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       soa.resize(words);
       sx = soa.data();
     }
-    uint8_t* const sf = reinterpret_cast<uint8_t*>(sx + 4 * m);
     cell_list_.resize(m);
     uint32_t* const cl = cell_list_.data();
 #pragma omp parallel for schedule(static) if (long(n) > parallel_min)
@@ -175,14 +173,12 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       sx[m + t] = p.x[b].y;
       sx[2 * m + t] = p.x[b].z;
       sx[3 * m + t] = p.radius[b];
-      sf[t] = p.flag[b] != kFree;
     }
     for (size_t t = n; t < m; ++t) {
       sx[t] = sx[m + t] = sx[2 * m + t] = sx[3 * m + t] = 0.0;
-      sf[t] = 0;
       cl[t] = 0;
     }
-    sin = {sx, sx + m, sx + 2 * m, sx + 3 * m, sf, cl, shift.data()};
+    sin = {sx, sx + m, sx + 2 * m, sx + 3 * m, cl, p.flag.data(), shift.data()};
   }
 
   // 4. Pairs, by a half stencil: each particle a (cells in order, a cell's particles in

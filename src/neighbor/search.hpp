@@ -16,18 +16,18 @@
 
 namespace cohdem {
 
-/// The candidates in cell order (index t of the build's cell list): position, radius,
-/// whether the body is fixed (not kFree), and the particle's own index. Each array holds
-/// kSearchPad entries past the last particle, which the last group of a range may read (they
-/// are never picked).
+/// The candidates in cell order (index t of the build's cell list): position, radius and
+/// the particle's own index, each array with kSearchPad entries past the last particle, which
+/// the last group of a range may read (they are never picked; their index is a valid one).
+/// The particles' flags (by particle index) are read only for a fixed particle's candidates.
 struct SearchInput {
   const double* x;
   const double* y;
   const double* z;
   const double* r;
-  const uint8_t* fixed;
   const uint32_t* index;
-  const Vec3* shift;  ///< image translations by image code (NeighborList::shift)
+  const uint8_t* flag;  ///< ParticleStore::flag
+  const Vec3* shift;    ///< image translations by image code (NeighborList::shift)
 };
 inline constexpr size_t kSearchPad = 4;
 

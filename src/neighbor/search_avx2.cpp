@@ -2,10 +2,10 @@
 #include "neighbor/search.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cstring>
 
 #include "core/pack_table.hpp"
+#include "particles/particle_store.hpp"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -33,7 +33,6 @@ __attribute__((target("avx2,popcnt"))) size_t search_avx2(const SearchInput& s, 
   const __m256d rav = _mm256_set1_pd(ra);
   const __m256i av = _mm256_set1_epi64x(int64_t(a));
   const __m256i ahi = _mm256_slli_epi64(av, 32);
-  const __m128i zero = _mm_setzero_si128();
   for (int r = 0; r < nr; ++r) {
     const uint8_t im = img[r], back = uint8_t(26 - im);  // back: a seen from b
     const Vec3 xs = xa - s.shift[im];
@@ -48,12 +47,8 @@ __attribute__((target("avx2,popcnt"))) size_t search_avx2(const SearchInput& s, 
       const __m256d rc = _mm256_add_pd(rav, _mm256_loadu_pd(cr + t));
       uint32_t m = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rc, rc), _CMP_LT_OQ)));
       m &= kLanesIn[std::min(e - t, 4u)];  // not the lanes past the range (no branch: ranges are short)
-      if (fixed_a) {  // pairs of two fixed bodies are not listed
-        uint32_t f4;
-        std::memcpy(&f4, s.fixed + t, sizeof f4);
-        m &= uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(
-            _mm_cvtepu8_epi32(_mm_cvtsi32_si128(int32_t(f4))), zero))));
-      }
+      if (fixed_a)  // pairs of two fixed bodies are not listed
+        for (uint32_t l = 0; l < 4; ++l) m &= ~(uint32_t(s.flag[s.index[t + l]] != kFree) << l);
       // Keys (lower << 32 | higher) and images (of the higher, seen from the lower).
       const __m256i bv = _mm256_cvtepu32_epi64(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s.index + t)));
       const __m256i lower = _mm256_cmpgt_epi64(bv, av);  // a < b (indices below 2^32)

@@ -6,7 +6,6 @@
 #include "sim/screen.hpp"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
