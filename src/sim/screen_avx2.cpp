@@ -88,17 +88,31 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   Vec3* const __restrict force = s.force;
   Vec3* const __restrict torque = s.torque;
   constexpr uint32_t kAllInPlace = 0x01010101u * kNoShift;
-  // Each entry's row, for entries kb.. (four at a time; a row's last store runs into the
-  // next row's slots, which that row then writes).
+  // Each entry's row, and its row particle's x, y, z and radius, for entries kb.. (four at a
+  // time; a row's last store runs into the next row's slots, which that row then writes): a
+  // group then reads its rows' particles as four plain loads, where loading them lane by lane
+  // took eight loads and six shuffles.
   uint32_t erow[kBatch + 4];
+  alignas(32) double ex[kBatch + 4], ey[kBatch + 4], ez[kBatch + 4], er_[kBatch + 4];
+  auto mark = [&](const long i, const uint32_t k0, const uint32_t k1) __attribute__((target("avx2"), always_inline)) {
+    const __m128i rv = _mm_set1_epi32(int32_t(i));
+    const __m256d bx = _mm256_set1_pd(x[i].x), by = _mm256_set1_pd(x[i].y), bz = _mm256_set1_pd(x[i].z),
+                  br = _mm256_set1_pd(radius[i]);
+    for (uint32_t k = k0; k < k1; k += 4) {
+      const uint32_t o = k - kb;
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + o), rv);
+      _mm256_storeu_pd(ex + o, bx);
+      _mm256_storeu_pd(ey + o, by);
+      _mm256_storeu_pd(ez + o, bz);
+      _mm256_storeu_pd(er_ + o, br);
+    }
+  };
   for (long i = i0; i <= i1 && i < b; ++i) {
     start_row(start, force, torque, i, kb);
-    const uint32_t k0 = std::max(start[i], kb), k1 = std::min(start[i + 1], ke);
-    const __m128i rv = _mm_set1_epi32(int32_t(i));
-    for (uint32_t k = k0; k < k1; k += 4) _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + (k - kb)), rv);
+    mark(i, std::max(start[i], kb), std::min(start[i + 1], ke));
   }
   // The lanes past the batch's end read a valid row (and are not picked).
-  _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + (ke - kb)), _mm_set1_epi32(int32_t(i0)));
+  mark(i0, ke, ke + 1);
   const uint32_t full = s.entries >= 4 ? s.entries - 3 : 0;
   const uint32_t kg = std::min(ke, full);
   __m128i kv = _mm_add_epi32(_mm_set1_epi32(int32_t(kb)), _mm_setr_epi32(0, 1, 2, 3));
@@ -108,8 +122,13 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   uint32_t nh = 0;
   uint32_t k = kb;
   for (; k < kg; k += 4) {
-    const uint32_t* const er = erow + (k - kb);
-    const Lanes I = load_lanes(x, radius, er[0], er[1], er[2], er[3]);
+    const uint32_t o = k - kb;
+    const uint32_t* const er = erow + o;
+    Lanes I;
+    I.x = _mm256_loadu_pd(ex + o);
+    I.y = _mm256_loadu_pd(ey + o);
+    I.z = _mm256_loadu_pd(ez + o);
+    I.r = _mm256_loadu_pd(er_ + o);
     Lanes J = load_lanes(x, radius, jdx[k], jdx[k + 1], jdx[k + 2], jdx[k + 3]);
     uint32_t im4;
     std::memcpy(&im4, image + k, sizeof im4);
