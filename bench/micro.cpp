@@ -19,6 +19,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -33,6 +34,7 @@
 #include "io/case_file.hpp"
 #include "models/registry.hpp"
 #include "sim/force_context.hpp"
+#include "sim/screen.hpp"
 #include "sim/system.hpp"
 
 using namespace cohdem;
@@ -298,6 +300,80 @@ void BM_CaseNeighborBuild(benchmark::State& st) {
   st.counters["lost_contacts"] = double(s->nl.stats.lost_contacts);
 }
 
+/// The force loop's list screening alone (sim/screen.hpp) on a case in mid-run (bench_case(),
+/// warmed as BM_CaseNeighborBuild): every entry of the lists screened in the kernel's batches
+/// of kBatch, by the AVX2 path and by the AVX-512 one in turn within each iteration (the
+/// scalar one too, as a reference), so that both see the same spell of the host. Reports each
+/// one's ns per list entry and avx512_over_avx2, the median of the iterations' time ratios.
+/// Skipped where the CPU lacks AVX-512.
+void BM_CaseScreen(benchmark::State& st) {
+  if (!avx512_available() || !avx2_available()) {
+    st.SkipWithError("this CPU or build has no AVX-512 screening");
+    return;
+  }
+  const std::string path = bench_case();
+  const char* warm = std::getenv("COHDEM_BENCH_WARM");
+  std::unique_ptr<System> s;
+  try {
+    s = build_system(load_case_file(path, {"simulation.threads=1"}));
+    s->prepare();
+    s->run(uint64_t(warm ? std::atol(warm) : 300));
+  } catch (const std::exception& e) {
+    st.SkipWithError((path + ": " + e.what()).c_str());
+    return;
+  }
+  const NeighborList& nl = s->nl;
+  const long n = long(s->particles.size());
+  std::vector<Vec3> force(static_cast<size_t>(n)), torque(static_cast<size_t>(n));  // the rows' sums, zeroed by the screening
+  const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
+  const ScreenInput in{nl.start.data(), nl.jdx.data(), nl.image.data(), nl.hist.live.data(), nl.shift.data(),
+                       s->particles.x.data(), s->particles.radius.data(), force.data(), torque.data(), entries};
+  using Fn = uint32_t (*)(const ScreenInput&, long, long, long, uint32_t, uint32_t, ScreenHits&);
+  auto sweep = [&](const Fn fn) {  // the kernel's batching (force_kernel.hpp, sweep and batch_end)
+    static ScreenHits hits;
+    uint64_t picked = 0;
+    long i = 0;
+    for (uint32_t k = nl.start[0]; i < n;) {
+      const uint32_t ke = std::min(k + kBatch, nl.start[size_t(n)]);
+      long i1 = i;
+      while (i1 < n && nl.start[size_t(i1 + 1)] <= ke) ++i1;
+      picked += fn(in, i, i1, n, k, ke, hits);
+      i = i1;
+      k = ke;
+    }
+    return picked;
+  };
+  auto timed = [&](const Fn fn, uint64_t& picked) {
+    const auto t0 = std::chrono::steady_clock::now();
+    picked = sweep(fn);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  const Fn scalar = [](const ScreenInput& a, long b, long c, long d, uint32_t e, uint32_t f, ScreenHits& h) {
+    return screen_scalar(a, b, c, d, e, f, h);
+  };
+  std::vector<double> ratios;
+  double t2 = 0, t5 = 0, t1 = 0;
+  uint64_t p2 = 0, p5 = 0, p1 = 0;
+  for (auto _ : st) {
+    const bool first = ratios.size() % 2 == 0;  // the order alternates
+    const double a = first ? timed(screen_avx2, p2) : 0, b5 = timed(screen_avx512, p5),
+                 a2 = first ? a : timed(screen_avx2, p2);
+    t1 += timed(scalar, p1);
+    t2 += a2;
+    t5 += b5;
+    ratios.push_back(b5 / a2);
+  }
+  if (p1 != p2 || p1 != p5) st.SkipWithError("the screenings picked different numbers of entries");
+  std::sort(ratios.begin(), ratios.end());
+  const double per = 1e9 / (double(st.iterations()) * double(entries));
+  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(n));
+  st.counters["scalar_ns_per_entry"] = t1 * per;
+  st.counters["avx2_ns_per_entry"] = t2 * per;
+  st.counters["avx512_ns_per_entry"] = t5 * per;
+  st.counters["avx512_over_avx2"] = ratios[ratios.size() / 2];
+  st.counters["picked_per_entry"] = double(p5) / double(entries);
+}
+
 /// COHDEM_BENCH_ITERS=N fixes the iteration count (for valgrind/callgrind comparisons).
 benchmark::internal::Benchmark* iters(benchmark::internal::Benchmark* b) {
   if (const char* e = std::getenv("COHDEM_BENCH_ITERS")) b->Iterations(std::atol(e));
@@ -334,6 +410,7 @@ void register_all() {
         ->Arg(32)->Unit(benchmark::kMillisecond);
   }
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+  benchmark::RegisterBenchmark("BM_CaseScreen", BM_CaseScreen)->Unit(benchmark::kMicrosecond);
   iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))
       ->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_NeighborBuild", BM_NeighborBuild)->Arg(32)->Unit(benchmark::kMicrosecond);

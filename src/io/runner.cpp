@@ -303,7 +303,10 @@ int run_case(Case c, const RunOptions& opt) {
                                   ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
                                   : "where the run allows (summary.json: step_pairs)";
     spdlog::info("force loop: {} thread(s), list screening {}, two steps per sweep {}", nt,
-                 screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)" : "scalar", pairs);
+                 screen_avx512_enabled() ? "AVX-512 (COHDEM_SIMD=avx2 selects the AVX2 one, COHDEM_SIMD=0 the scalar one)"
+                 : screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)"
+                                         : "scalar",
+                 pairs);
     if (s.serial_blocks() && nt > 1)
       spdlog::warn("force loop: the {} threads' blocks run one after another on one thread (COHDEM_SERIAL_BLOCKS=1, "
                    "a diagnostic: the same results, not the threads' speed)",
@@ -512,7 +515,7 @@ int run_case(Case c, const RunOptions& opt) {
                            {"serial_calls", ts.serial_calls}};
     }
   }
-  j["screening"] = screen_avx2_enabled() ? "avx2" : "scalar";  // the force loop's list screening (results identical)
+  j["screening"] = screen_simd_name();  // the force loop's list screening (results identical)
   j["peak_rss_bytes"] = std::max(peak_rss_setup, peak_rss_bytes());  // whole process
   j["peak_rss_run_bytes"] = peak_rss_bytes();  // from the start of the time loop
   j["run_bytes_per_particle"] = s.particles.size() ? peak_rss_bytes() / double(s.particles.size()) : 0.0;

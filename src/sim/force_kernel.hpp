@@ -76,6 +76,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // The screening reads whole groups of four entries up to the list's end (screen.hpp).
   const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
   const bool simd = screen_avx2_enabled();
+  const bool wide = simd && screen_avx512_enabled();  // the screening eight entries at a time
   // Velocities written only by the closing half-kick (ForceContext::kick_h), positions only
   // by the fused opening of the next step (ForceContext::open_dt), after every pair of the
   // particle has been evaluated.
@@ -232,7 +233,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       ScreenHits hits;  // no zero fill
       const ScreenInput scr{start, jdx, image, live, shift, x, radius, force, torque, entries};
       const uint32_t nh =
-          simd ? screen_avx2(scr, i0, i1, b, kb, ke, hits) : screen_scalar(scr, i0, i1, b, kb, ke, hits);
+          wide   ? screen_avx512(scr, i0, i1, b, kb, ke, hits)
+          : simd ? screen_avx2(scr, i0, i1, b, kb, ke, hits)
+                 : screen_scalar(scr, i0, i1, b, kb, ke, hits);
       const uint32_t* const hk = hits.k;
       const uint32_t* const hrow = hits.row;
       // The touching entries' history and partners' reverse sums, velocities and spins are

@@ -1,10 +1,11 @@
 // The force loop's screening: which list entries of a batch of consecutive rows touch or are
 // live, with their pair vectors and squared distances (src/sim/force_kernel.hpp, pass 1).
 //
-// Two implementations give the same output bit for bit: `screen_scalar` (inline in the
-// kernel, any CPU) and `screen_avx2` (x86-64 with AVX2, chosen at run time by
+// Three implementations give the same output bit for bit: `screen_scalar` (inline in the
+// kernel, any CPU), `screen_avx2` (x86-64 with AVX2, chosen at run time by
 // `screen_avx2_enabled`), which screens four consecutive entries at a time (of one row or
-// of several). Both compute, per entry, x_j (+ its periodic shift when the entry has one),
+// of several), and `screen_avx512` (eight at a time where the CPU has AVX-512,
+// `screen_avx512_enabled`). Both compute, per entry, x_j (+ its periodic shift when the entry has one),
 // d = x_i - x_j, d2 = (dx dx + dy dy) + dz dz and rsum = r_i + r_j, in that order and
 // without fused multiply-adds, and pick the entry when d2 < rsum^2 or it is live; the
 // picked entries are listed in ascending order.
@@ -25,10 +26,11 @@ namespace cohdem {
 inline constexpr uint32_t kBatch = 512;
 
 /// The picked entries of one batch (structure of arrays: the AVX2 screening stores four
-/// lanes of each at once). Room for kBatch + 4: a group of four writes all its lanes and
-/// counts only the picked ones. Left uninitialised (no zero fill per batch).
+/// lanes of each at once). Room for kBatch + 8: a group of four (AVX2) or eight (AVX-512)
+/// writes all its lanes and counts only the picked ones. Left uninitialised (no zero fill per
+/// batch).
 struct ScreenHits {
-  static constexpr uint32_t kCap = kBatch + 4;
+  static constexpr uint32_t kCap = kBatch + 8;
   uint32_t k[kCap];    ///< list entry
   uint32_t row[kCap];  ///< its row (particle i)
   double dx[kCap], dy[kCap], dz[kCap];  ///< x_i - x_j (shifted image)
@@ -118,6 +120,9 @@ COHDEM_INLINE uint32_t screen_scalar(const ScreenInput& s, const long i0, const 
 /// The same as screen_scalar, four consecutive entries at a time in AVX2 registers (x86-64
 /// only; call it only when screen_avx2_enabled()).
 uint32_t screen_avx2(const ScreenInput& s, long i0, long i1, long b, uint32_t kb, uint32_t ke, ScreenHits& h);
+/// The same, eight entries at a time in AVX-512 registers (x86-64 only; call it only when
+/// screen_avx512_enabled()).
+uint32_t screen_avx512(const ScreenInput& s, long i0, long i1, long b, uint32_t kb, uint32_t ke, ScreenHits& h);
 
 /// The largest of p[0..n), at least `floor`, without a branch per element (a running
 /// maximum compiled as compare and branch mispredicts on about every other entry of a list
@@ -133,12 +138,23 @@ COHDEM_INLINE uint32_t max_index_scalar(const uint32_t* p, const uint32_t n, con
 /// The same, eight at a time in AVX2 registers (call it only when screen_avx2_enabled()).
 uint32_t max_index_avx2(const uint32_t* p, uint32_t n, uint32_t floor);
 
-/// Whether the force loops screen with AVX2: the CPU has it, the build is for x86-64, and
-/// the environment does not say COHDEM_SIMD=0 (for comparisons; read once).
+/// Whether the force loops take their AVX2 paths (screening, lanes, finish; the list build's
+/// search): the CPU has AVX2, the build is for x86-64, and the environment does not say
+/// COHDEM_SIMD=0 (for comparisons; read once).
 bool screen_avx2_enabled();
-/// Overrides the choice (tests: both paths on one machine); call it between runs, not during one.
+/// Whether the screening takes eight entries at a time in AVX-512 registers (screen_avx512)
+/// instead of four in AVX2: the AVX2 paths are on, the CPU and the operating system have
+/// AVX-512 F, VL, DQ and BW, and the environment does not say COHDEM_SIMD=avx2 (read once).
+bool screen_avx512_enabled();
+/// The screening's name for logs and summary.json: "avx512", "avx2" or "scalar".
+const char* screen_simd_name();
+/// Override the choices (tests: every path on one machine); call them between runs, not
+/// during one. Each is refused (left off) where the CPU lacks the instructions.
 void set_screen_avx2(bool on);
+void set_screen_avx512(bool on);
 /// Whether this CPU and build have the AVX2 paths at all, whatever COHDEM_SIMD says.
 bool avx2_available();
+/// Whether this CPU, operating system and build have the AVX-512 screening.
+bool avx512_available();
 
 }  // namespace cohdem

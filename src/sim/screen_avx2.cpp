@@ -1,6 +1,7 @@
 // The force loop's screening in AVX2 registers (see screen.hpp): the batch's entries four at
-// a time across rows (each lane reads its own row's particle, so short rows leave no lane
-// idle), the picked ones left-packed into ScreenHits with one permutation per array. The
+// a time across rows (each lane reads its own row's particle from per-entry copies made once
+// per row, so short rows leave no lane idle), periodic shifts gathered for the lanes that
+// have one, the picked ones left-packed into ScreenHits with one permutation per array. The
 // function is compiled for AVX2 alone (no FMA: a fused multiply-add would round d2
 // differently from the scalar screening) and called only when the CPU has it.
 #include "sim/screen.hpp"
@@ -20,7 +21,8 @@ namespace cohdem {
 
 namespace {
 
-std::atomic<int> g_avx2{-1};  // -1: not decided yet (read by every force call)
+std::atomic<int> g_avx2{-1};    // -1: not decided yet (read by every force call)
+std::atomic<int> g_avx512{-1};  // the same for the AVX-512 screening
 
 #if defined(__x86_64__)
 
@@ -51,31 +53,6 @@ __attribute__((target("avx2"), always_inline)) inline Lanes load_lanes(const Vec
 
 #if defined(__x86_64__)
 
-namespace {
-
-/// Adds the periodic shifts of the group of four entries from k, lane by lane as
-/// screen_entry does (only where an entry has one). Out of line: rare, and inline its
-/// registers would spill the common path's.
-[[gnu::noinline]] __attribute__((target("avx2"))) void shift_lanes(const ScreenInput& s, const uint32_t k, __m256d* xyz) {
-  alignas(32) double px[4], py[4], pz[4];
-  _mm256_store_pd(px, xyz[0]);
-  _mm256_store_pd(py, xyz[1]);
-  _mm256_store_pd(pz, xyz[2]);
-  for (int l = 0; l < 4; ++l) {
-    const uint8_t im = s.image[k + uint32_t(l)];
-    if (im != kNoShift) {
-      px[l] += s.shift[im].x;
-      py[l] += s.shift[im].y;
-      pz[l] += s.shift[im].z;
-    }
-  }
-  xyz[0] = _mm256_load_pd(px);
-  xyz[1] = _mm256_load_pd(py);
-  xyz[2] = _mm256_load_pd(pz);
-}
-
-}  // namespace
-
 __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s, const long i0, const long i1,
                                                             const long b, const uint32_t kb, const uint32_t ke,
                                                             ScreenHits& h) {
@@ -85,6 +62,7 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   const uint8_t* const __restrict live = s.live;
   const Vec3* const __restrict x = s.x;
   const double* const __restrict radius = s.radius;
+  const Vec3* const __restrict shift = s.shift;
   Vec3* const __restrict force = s.force;
   Vec3* const __restrict torque = s.torque;
   constexpr uint32_t kAllInPlace = 0x01010101u * kNoShift;
@@ -132,12 +110,17 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
     Lanes J = load_lanes(x, radius, jdx[k], jdx[k + 1], jdx[k + 2], jdx[k + 3]);
     uint32_t im4;
     std::memcpy(&im4, image + k, sizeof im4);
-    if (im4 != kAllInPlace) [[unlikely]] {
-      __m256d xyz[3] = {J.x, J.y, J.z};
-      shift_lanes(s, k, xyz);
-      J.x = xyz[0];
-      J.y = xyz[1];
-      J.z = xyz[2];
+    if (im4 != kAllInPlace) {
+      // The periodic shifts of the lanes that have one, gathered from the (small, cached)
+      // table and added to those lanes only, as screen_entry does.
+      const __m128i imv = _mm_cvtepu8_epi32(_mm_cvtsi32_si128(int32_t(im4)));
+      const __m256d sh = _mm256_castsi256_pd(
+          _mm256_cvtepi32_epi64(_mm_xor_si128(_mm_cmpeq_epi32(imv, _mm_set1_epi32(kNoShift)), _mm_set1_epi32(-1))));
+      const __m128i i3 = _mm_add_epi32(imv, _mm_add_epi32(imv, imv));
+      const __m256d zero = _mm256_setzero_pd();
+      J.x = _mm256_blendv_pd(J.x, _mm256_add_pd(J.x, _mm256_mask_i32gather_pd(zero, &shift[0].x, i3, sh, 8)), sh);
+      J.y = _mm256_blendv_pd(J.y, _mm256_add_pd(J.y, _mm256_mask_i32gather_pd(zero, &shift[0].y, i3, sh, 8)), sh);
+      J.z = _mm256_blendv_pd(J.z, _mm256_add_pd(J.z, _mm256_mask_i32gather_pd(zero, &shift[0].z, i3, sh, 8)), sh);
     }
     const __m256d dx = _mm256_sub_pd(I.x, J.x), dy = _mm256_sub_pd(I.y, J.y), dz = _mm256_sub_pd(I.z, J.z);
     const __m256d d2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
@@ -187,7 +170,20 @@ bool screen_avx2_enabled() {
   return g_avx2 == 1;
 }
 
+bool screen_avx512_enabled() {
+  if (g_avx512 < 0) {
+    const char* e = std::getenv("COHDEM_SIMD");
+    g_avx512 = (e != nullptr && std::strcmp(e, "avx2") == 0) ? 0 : (avx512_available() ? 1 : 0);
+  }
+  return g_avx512 == 1 && screen_avx2_enabled();
+}
+
+const char* screen_simd_name() {
+  return screen_avx512_enabled() ? "avx512" : screen_avx2_enabled() ? "avx2" : "scalar";
+}
+
 void set_screen_avx2(const bool on) { g_avx2 = (on && __builtin_cpu_supports("avx2")) ? 1 : 0; }
+void set_screen_avx512(const bool on) { g_avx512 = (on && avx512_available()) ? 1 : 0; }
 bool avx2_available() { return __builtin_cpu_supports("avx2"); }
 
 #else
@@ -200,7 +196,10 @@ uint32_t max_index_avx2(const uint32_t* p, const uint32_t n, const uint32_t floo
   return max_index_scalar(p, n, floor);
 }
 bool screen_avx2_enabled() { return false; }
+bool screen_avx512_enabled() { return false; }
+const char* screen_simd_name() { return "scalar"; }
 void set_screen_avx2(bool) { g_avx2 = 0; }
+void set_screen_avx512(bool) { g_avx512 = 0; }
 bool avx2_available() { return false; }
 
 #endif

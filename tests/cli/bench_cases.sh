@@ -84,8 +84,8 @@ if python3 "$src/bench/instructions.py" --problems packing --packing-n 2000 --co
 import json, math, sys
 r = json.load(open('$work/ins/instructions.json'))['results']['packing']['codes']['cohdem']
 n = r['instructions_per_particle_step']
-# The force loop: the kernel and, on AVX2 machines, its screening (screen_avx2, shift_lanes).
-loop = lambda f: any(s in f for s in ('ContactModelImpl', 'screen_avx2', 'shift_lanes'))
+# The force loop: the kernel and, on AVX2 machines, its screening (screen_avx2; screen_avx512 where AVX-512 runs).
+loop = lambda f: any(s in f for s in ('ContactModelImpl', 'screen_avx2', 'screen_avx512'))
 top = r['top_functions'][0]
 in_loop = sum(t['per_particle_step'] for t in r['top_functions'] if loop(t['function']))
 ok = math.isfinite(n) and n > 0 and loop(top['function']) and in_loop > 0.5 * n

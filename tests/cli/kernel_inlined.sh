@@ -8,7 +8,7 @@
 # geometry (rare entries), the wall contacts of a particle (ContactModelImpl::wall_contacts,
 # kept out of line on purpose: only particles with wall entries call it), the thread
 # split's set-up (PairSlots, once per list build), the AVX2 screening of a batch
-# (screen_avx2: compiled for AVX2 alone, so it cannot be inlined into the portable kernel),
+# (screen_avx2 or screen_avx512: compiled for AVX2 or AVX-512 alone, so they cannot be inlined into the portable kernel),
 # the finish of free particles four at a time (finish_free_avx2: one call per run of them,
 # AVX2 alone for the same reason), the region function from its parallel region and a vector's destructor (once a call each),
 # the contacts of the laws with lanes (linear_, hertz_, mepa_lanes_avx2 and their _epsd_
@@ -38,7 +38,7 @@ objdump -d --no-show-raw-insn -C "$bin" | awk '
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::max_index_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/ || (t ~ /::compute\(cohdem::ForceContext&\) const::\{lambda\(/ && t ~ /State\*/) || t ~ /std::vector<.*>::~vector\(\)/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::screen_avx512\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::max_index_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd)?_lanes_avx2\(/ || (t ~ /::compute\(cohdem::ForceContext&\) const::\{lambda\(/ && t ~ /State\*/) || t ~ /std::vector<.*>::~vector\(\)/) next
     bad[t]++
   }
   END {

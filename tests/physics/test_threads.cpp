@@ -252,6 +252,39 @@ TEST(Threads, ScalarAndAvx2ScreeningGiveIdenticalStates) {
          0.0, 0, "==");
 }
 
+// The AVX-512 screening (eight entries at a time) against the AVX2 one, the same way: the
+// whole run, on one and on two threads, must not see which one ran.
+TEST(Threads, Avx2AndAvx512ScreeningGiveIdenticalStates) {
+  const bool was2 = screen_avx2_enabled(), was512 = screen_avx512_enabled();
+  set_screen_avx2(true);
+  set_screen_avx512(true);
+  if (!screen_avx512_enabled()) {
+    set_screen_avx2(was2);
+    set_screen_avx512(was512);
+    GTEST_SKIP() << "no AVX-512 screening on this CPU, operating system or build";
+  }
+  set_screen_avx512(false);
+  const State a = run(1), c = run(2);
+  set_screen_avx512(true);
+  const State b = run(1), d = run(2);
+  set_screen_avx2(was2);
+  set_screen_avx512(was512);
+  omp_set_num_threads(1);
+  ASSERT_EQ(a.id, b.id);
+  ASSERT_EQ(c.id, d.id);
+  EXPECT_GT(a.contacts, 10000u);
+  size_t differ = 0;
+  for (size_t i = 0; i < a.x.size(); ++i) {
+    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+    differ += !(c.x[i] == d.x[i] && c.v[i] == d.v[i] && c.w[i] == d.w[i]);
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_TRUE(a.wall_force == b.wall_force);
+  EXPECT_EQ(a.builds, b.builds);
+  report("AVX2 vs AVX-512 screening: particles with any differing bit (300, 400 steps, 1 and 2 threads)",
+         double(differ), 0.0, 0, "==");
+}
+
 namespace {
 // The box of spheres of one species, `sp`, among the materials `mats` (walls of material
 // `wm`): the force loop's one-species path (NeighborList::one_species) reads the pair

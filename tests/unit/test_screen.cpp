@@ -1,10 +1,11 @@
-// The force loop's two screenings (src/sim/screen.hpp): the AVX2 one, four entries at a
-// time, must pick the same entries in the same order, with the same pair vectors and
-// squared distances bit for bit, as the scalar one, entry by entry. Checked on random lists:
-// rows of 0 to 19 entries (the AVX2 path marks a row's entries with their row four at a time:
-// up to five stores a row), partners in place and through periodic images, contacts, near
-// misses, live entries apart, coordinates of -0, and batches that cut rows, stop below a
-// block's end and reach the list's end (whose last entries the AVX2 path screens singly).
+// The force loop's screenings (src/sim/screen.hpp): the AVX2 one, four entries at a time,
+// and the AVX-512 one, eight at a time, must each pick the same entries in the same order,
+// with the same pair vectors and squared distances bit for bit, as the scalar one, entry by
+// entry. Checked on random lists: rows of 0 to 19 entries (the wide paths mark a row's
+// entries with their row four or eight at a time), partners in place and through periodic
+// images, contacts, near misses, live entries apart, coordinates of -0, and batches that cut
+// rows, stop below a block's end and reach the list's end (whose last entries the wide paths
+// screen singly). The AVX-512 test skips where the CPU lacks AVX-512.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -53,6 +54,10 @@ struct RandomList {
           const double d = (radius[size_t(i)] + radius[j]) * rng.uniform(0.9, 1.1);
           x[j] = {x[size_t(i)].x + d, x[size_t(i)].y, x[size_t(i)].z};
           if (rng.uniform(0, 1) < 0.2) x[j] = {x[size_t(i)].x, x[size_t(i)].y, x[size_t(i)].z - d};
+          // Both at x = -0 now and then: d_x = -0 - (-0) = +0 in place, -0 had +0 been added
+          // to x_j as a shift (a path that adds shifts to a whole group must skip the lanes
+          // without one).
+          if (rng.uniform(0, 1) < 0.1) x[size_t(i)].x = x[j].x = -0.0;
         }
         jdx.push_back(j);
         image.push_back(rng.uniform(0, 1) < 0.15 ? uint8_t(rng.uniform(0, 26.99)) : kNoShift);
@@ -69,8 +74,11 @@ struct RandomList {
   }
 };
 
-/// Runs both screenings on one batch; returns the number of entries picked (both agree).
-uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uint32_t ke) {
+using ScreenFn = uint32_t (*)(const ScreenInput&, long, long, long, uint32_t, uint32_t, ScreenHits&);
+
+/// Runs the scalar screening and `wide` (the AVX2 one unless given) on one batch; returns the
+/// number of entries picked (both agree).
+uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uint32_t ke, ScreenFn wide = screen_avx2) {
   ScreenHits a, v;
   std::memset(&a, 0xAB, sizeof a);
   std::memset(&v, 0xCD, sizeof v);
@@ -79,7 +87,7 @@ uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uin
   const uint32_t na = screen_scalar(in, i0, i1, b, kb, ke, a);
   const auto force_scalar = L.force;
   L.force = fa;
-  const uint32_t nv = screen_avx2(in, i0, i1, b, kb, ke, v);
+  const uint32_t nv = wide(in, i0, i1, b, kb, ke, v);
   EXPECT_EQ(na, nv) << "rows " << i0 << ".." << i1 << " entries " << kb << ".." << ke;
   for (uint32_t h = 0; h < std::min(na, nv); ++h) {
     EXPECT_EQ(a.k[h], v.k[h]) << "hit " << h;
@@ -95,10 +103,8 @@ uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uin
   return na;
 }
 
-}  // namespace
-
-TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
-  if (!avx2_available()) GTEST_SKIP() << "this CPU or build has no AVX2 screening (not x86-64 with AVX2)";
+/// The random lists' batches through the scalar screening and `wide`, compared hit by hit.
+void compare_random_lists(const ScreenFn wide) {
   uint64_t picked = 0, batches = 0, shifted_hits = 0;
   for (uint64_t seed = 1; seed <= 20; ++seed) {
     RandomList L(seed);
@@ -113,7 +119,7 @@ TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
           const uint32_t ke = std::min(k + size, L.start[size_t(b)]);
           long i1 = i;
           while (i1 < b && L.start[size_t(i1 + 1)] <= ke) ++i1;
-          picked += compare_batch(L, i, i1, b, k, ke);
+          picked += compare_batch(L, i, i1, b, k, ke, wide);
           ++batches;
           i = i1;
           k = ke;
@@ -128,17 +134,37 @@ TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
   EXPECT_GT(shifted_hits, 1000u);
 }
 
-TEST(Screening, ListEndScreenedSingly) {
-  if (!avx2_available()) GTEST_SKIP() << "no AVX2 screening here";
-  // Lists of 1 to 9 entries in one row: the AVX2 path reads groups of four only inside the list.
-  for (uint32_t len = 1; len <= 9; ++len) {
+/// Lists of 1 to 19 entries in one row, all live: the wide paths read whole groups (of four
+/// or eight) only inside the list, and screen its last entries singly.
+void compare_list_ends(const ScreenFn wide) {
+  for (uint32_t len = 1; len <= 19; ++len) {
     RandomList L(100 + len, 4);
     L.start = {0, len, len, len, len};
     L.jdx.assign(len, 1);
     L.image.assign(len, kNoShift);
     L.live.assign(len, 1);
-    EXPECT_EQ(compare_batch(L, 0, 3, 4, 0, len), len);
+    EXPECT_EQ(compare_batch(L, 0, 3, 4, 0, len, wide), len);
   }
+}
+
+}  // namespace
+
+TEST(Screening, Avx2PicksWhatTheScalarScreeningPicks) {
+  if (!avx2_available()) GTEST_SKIP() << "this CPU or build has no AVX2 screening (not x86-64 with AVX2)";
+  compare_random_lists(screen_avx2);
+}
+
+TEST(Screening, Avx512PicksWhatTheScalarScreeningPicks) {
+  // Eight entries at a time: groups that span more rows (rows of 0 to 19 entries), a batch's
+  // end inside a group (the lanes past it masked off), periodic images and live entries.
+  if (!avx512_available()) GTEST_SKIP() << "this CPU, operating system or build has no AVX-512 screening";
+  compare_random_lists(screen_avx512);
+}
+
+TEST(Screening, ListEndScreenedSingly) {
+  if (!avx2_available()) GTEST_SKIP() << "no AVX2 screening here";
+  compare_list_ends(screen_avx2);
+  if (avx512_available()) compare_list_ends(screen_avx512);
 }
 
 TEST(Screening, MaxIndexIsTheLargestEntryOrTheFloor) {
