@@ -5,7 +5,9 @@
 // thread's own particles and stores and gathers only those of block-boundary particles,
 // unless asked to record all: several code paths, one result).
 #include <gtest/gtest.h>
+
 #include <algorithm>
+#include <functional>
 #include <omp.h>
 
 #include "fixture.hpp"
@@ -224,6 +226,32 @@ TEST(Threads, BlocksSweptInSeriesGiveTheThreadsStates) {
   EXPECT_GT(b.head[0], 0.0);
 }
 
+namespace {
+// Runs the box on one and on two threads with `off` and then `on` applied (two screening
+// paths), and checks that the four runs end in the same state bit for bit, per thread count.
+void expect_screenings_identical(const std::function<void()>& off, const std::function<void()>& on,
+                                 const char* what) {
+  off();
+  const State a = run(1), c = run(2);
+  on();
+  const State b = run(1), d = run(2);
+  omp_set_num_threads(1);
+  ASSERT_EQ(a.id, b.id);
+  ASSERT_EQ(c.id, d.id);
+  EXPECT_GT(a.contacts, 10000u);
+  size_t differ = 0;
+  for (size_t i = 0; i < a.x.size(); ++i) {
+    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
+    differ += !(c.x[i] == d.x[i] && c.v[i] == d.v[i] && c.w[i] == d.w[i]);
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_TRUE(a.wall_force == b.wall_force);
+  EXPECT_EQ(a.builds, b.builds);
+  report((std::string(what) + ": particles with any differing bit (300, 400 steps, 1 and 2 threads)").c_str(),
+         double(differ), 0.0, 0, "==");
+}
+}  // namespace
+
 // The AVX2 screening (four list entries at a time) and the scalar one pick the same entries
 // with the same pair vectors (tests/unit/test_screen.cpp checks them entry by entry): the
 // whole run, on one and on two threads, must not see which one ran.
@@ -231,58 +259,25 @@ TEST(Threads, ScalarAndAvx2ScreeningGiveIdenticalStates) {
   const bool was = screen_avx2_enabled();  // as the environment set it (COHDEM_SIMD)
   set_screen_avx2(true);
   if (!screen_avx2_enabled()) GTEST_SKIP() << "no AVX2 screening on this CPU or build";
-  set_screen_avx2(false);
-  const State a = run(1), c = run(2);
-  set_screen_avx2(true);
-  const State b = run(1), d = run(2);
+  const bool was512 = screen_avx512_enabled();
+  set_screen_avx512(false);  // the AVX2 screening itself, where AVX-512 is there too
+  expect_screenings_identical([] { set_screen_avx2(false); }, [] { set_screen_avx2(true); },
+                              "scalar vs AVX2 screening");
   set_screen_avx2(was);
-  omp_set_num_threads(1);
-  ASSERT_EQ(a.id, b.id);
-  ASSERT_EQ(c.id, d.id);
-  EXPECT_GT(a.contacts, 10000u);
-  size_t differ = 0;
-  for (size_t i = 0; i < a.x.size(); ++i) {
-    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
-    differ += !(c.x[i] == d.x[i] && c.v[i] == d.v[i] && c.w[i] == d.w[i]);
-  }
-  EXPECT_EQ(differ, 0u);
-  EXPECT_TRUE(a.wall_force == b.wall_force);
-  EXPECT_EQ(a.builds, b.builds);
-  report("scalar vs AVX2 screening: particles with any differing bit (300, 400 steps, 1 and 2 threads)", double(differ),
-         0.0, 0, "==");
+  set_screen_avx512(was512);
 }
 
-// The AVX-512 screening (eight entries at a time) against the AVX2 one, the same way: the
-// whole run, on one and on two threads, must not see which one ran.
+// The AVX-512 screening (eight entries at a time) against the AVX2 one, the same way.
 TEST(Threads, Avx2AndAvx512ScreeningGiveIdenticalStates) {
   const bool was2 = screen_avx2_enabled(), was512 = screen_avx512_enabled();
   set_screen_avx2(true);
   set_screen_avx512(true);
-  if (!screen_avx512_enabled()) {
-    set_screen_avx2(was2);
-    set_screen_avx512(was512);
-    GTEST_SKIP() << "no AVX-512 screening on this CPU, operating system or build";
-  }
-  set_screen_avx512(false);
-  const State a = run(1), c = run(2);
-  set_screen_avx512(true);
-  const State b = run(1), d = run(2);
+  if (screen_avx512_enabled())
+    expect_screenings_identical([] { set_screen_avx512(false); }, [] { set_screen_avx512(true); },
+                                "AVX2 vs AVX-512 screening");
   set_screen_avx2(was2);
   set_screen_avx512(was512);
-  omp_set_num_threads(1);
-  ASSERT_EQ(a.id, b.id);
-  ASSERT_EQ(c.id, d.id);
-  EXPECT_GT(a.contacts, 10000u);
-  size_t differ = 0;
-  for (size_t i = 0; i < a.x.size(); ++i) {
-    differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
-    differ += !(c.x[i] == d.x[i] && c.v[i] == d.v[i] && c.w[i] == d.w[i]);
-  }
-  EXPECT_EQ(differ, 0u);
-  EXPECT_TRUE(a.wall_force == b.wall_force);
-  EXPECT_EQ(a.builds, b.builds);
-  report("AVX2 vs AVX-512 screening: particles with any differing bit (300, 400 steps, 1 and 2 threads)",
-         double(differ), 0.0, 0, "==");
+  if (!avx512_available()) GTEST_SKIP() << "no AVX-512 screening on this CPU, operating system or build";
 }
 
 namespace {
