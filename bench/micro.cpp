@@ -355,9 +355,14 @@ void BM_CaseScreen(benchmark::State& st) {
   double t2 = 0, t5 = 0, t1 = 0;
   uint64_t p2 = 0, p5 = 0, p1 = 0;
   for (auto _ : st) {
-    const bool first = ratios.size() % 2 == 0;  // the order alternates
-    const double a = first ? timed(screen_avx2, p2) : 0, b5 = timed(screen_avx512, p5),
-                 a2 = first ? a : timed(screen_avx2, p2);
+    double a2, b5;
+    if (ratios.size() % 2 == 0) {  // the order alternates
+      a2 = timed(screen_avx2, p2);
+      b5 = timed(screen_avx512, p5);
+    } else {
+      b5 = timed(screen_avx512, p5);
+      a2 = timed(screen_avx2, p2);
+    }
     t1 += timed(scalar, p1);
     t2 += a2;
     t5 += b5;

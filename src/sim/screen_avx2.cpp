@@ -71,7 +71,7 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   // group then reads its rows' particles as four plain loads, where loading them lane by lane
   // took eight loads and six shuffles.
   uint32_t erow[kBatch + 4];
-  alignas(32) double ex[kBatch + 4], ey[kBatch + 4], ez[kBatch + 4], er_[kBatch + 4];
+  alignas(32) double ex[kBatch + 4], ey[kBatch + 4], ez[kBatch + 4], erad[kBatch + 4];
   auto mark = [&](const long i, const uint32_t k0, const uint32_t k1) __attribute__((target("avx2"), always_inline)) {
     const __m128i rv = _mm_set1_epi32(int32_t(i));
     const __m256d bx = _mm256_set1_pd(x[i].x), by = _mm256_set1_pd(x[i].y), bz = _mm256_set1_pd(x[i].z),
@@ -82,7 +82,7 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
       _mm256_storeu_pd(ex + o, bx);
       _mm256_storeu_pd(ey + o, by);
       _mm256_storeu_pd(ez + o, bz);
-      _mm256_storeu_pd(er_ + o, br);
+      _mm256_storeu_pd(erad + o, br);
     }
   };
   for (long i = i0; i <= i1 && i < b; ++i) {
@@ -106,7 +106,7 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
     I.x = _mm256_loadu_pd(ex + o);
     I.y = _mm256_loadu_pd(ey + o);
     I.z = _mm256_loadu_pd(ez + o);
-    I.r = _mm256_loadu_pd(er_ + o);
+    I.r = _mm256_loadu_pd(erad + o);
     Lanes J = load_lanes(x, radius, jdx[k], jdx[k + 1], jdx[k + 2], jdx[k + 3]);
     uint32_t im4;
     std::memcpy(&im4, image + k, sizeof im4);

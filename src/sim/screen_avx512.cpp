@@ -73,10 +73,10 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
   constexpr uint64_t kAllInPlace = 0x0101010101010101ull * kNoShift;
   // Each entry's row, and its row particle's x, y, z and radius, for entries kb.. (eight at
   // a time; a row's last store runs into the next row's slots, which that row then writes):
-  // a group then reads its rows' particles as four plain loads, where loading them lane by
-  // lane took 16 loads and 12 shuffles (the screening's bottleneck).
+  // a group then reads its rows' particles as four plain loads instead of assembling them
+  // lane by lane (24 loads and the shuffles to place them: the screening's bottleneck).
   uint32_t erow[kBatch + 8];
-  alignas(64) double ex[kBatch + 8], ey[kBatch + 8], ez[kBatch + 8], er_[kBatch + 8];
+  alignas(64) double ex[kBatch + 8], ey[kBatch + 8], ez[kBatch + 8], erad[kBatch + 8];
   auto mark = [&](const long i, const uint32_t k0, const uint32_t k1)
                   __attribute__((target("avx512f,avx512vl"), always_inline)) {
     const __m256i rv = _mm256_set1_epi32(int32_t(i));
@@ -88,7 +88,7 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
       _mm512_storeu_pd(ex + o, bx);
       _mm512_storeu_pd(ey + o, by);
       _mm512_storeu_pd(ez + o, bz);
-      _mm512_storeu_pd(er_ + o, br);
+      _mm512_storeu_pd(erad + o, br);
     }
   };
   for (long i = i0; i <= i1 && i < b; ++i) {
@@ -110,7 +110,7 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
     I.x = _mm512_loadu_pd(ex + o);
     I.y = _mm512_loadu_pd(ey + o);
     I.z = _mm512_loadu_pd(ez + o);
-    I.r = _mm512_loadu_pd(er_ + o);
+    I.r = _mm512_loadu_pd(erad + o);
     Lanes8 J = load_lanes(x, radius, jdx + k);
     uint64_t im8;
     std::memcpy(&im8, image + k, sizeof im8);
