@@ -38,7 +38,11 @@ stay in OUT):
      (cohdem_bench's BM_ForceAlternate: the two force loops alternated in blocks of a few
      calls inside one process, the ratio paired block by block; the median of its repetitions).
      Each law alternated with a second lattice of itself is the method's control: its ratio
-     must come out within 3 % of 1, or the CPU-time figure is not trusted (not met).
+     must come out within 3 % of 1, or the CPU-time figure is not trusted (not met). Each
+     block starts from the same histories (sticking contacts, as in a packing at rest). Beside
+     the verdict, for the reader: MEPA without rolling, the linear law with EPSD, and MEPA +
+     EPSD without EPSD's viscous part (eta_r = 0, the ring shear cases' setting), each over
+     the linear law.
 
 Each target is judged on this invocation's figures only: "met" or "not met". Timings on a
 shared VM move from run to run (docs/performance.md quotes several invocations); the JSON
@@ -177,7 +181,11 @@ def contacts(a, out):
             "time_ratio_quartiles": [med("linear/mepa+epsd", "ratio_q1"), med("linear/mepa+epsd", "ratio_q3")],
             "blocks": sum(int(r["blocks"]) for r in reps["linear/mepa+epsd"]),
             "control_linear": med("linear/linear", "ratio"),
-            "control_mepa_epsd": med("mepa+epsd/mepa+epsd", "ratio")}
+            "control_mepa_epsd": med("mepa+epsd/mepa+epsd", "ratio"),
+            # for the reader: which part of the law costs what, over the linear law
+            "time_ratio_mepa": med("linear/mepa", "ratio"),
+            "time_ratio_linear_epsd": med("linear/linear+epsd", "ratio"),
+            "time_ratio_mepa_epsd_eta0": med("linear/mepa+epsd0", "ratio")}
 
 
 def verdict(ok):
@@ -264,7 +272,10 @@ def table(got):
                 f"{C['time_ratio_quartiles'][0]:.2f}-{C['time_ratio_quartiles'][1]:.2f}x; "
                 f"{C['time_mepa_epsd_s'] * 1e3:.2f} against {C['time_linear_s'] * 1e3:.2f} ms per force call; "
                 f"controls, each law against itself: {C['control_linear']:.3f}, {C['control_mepa_epsd']:.3f}"
-                f"{'' if controls_ok else ', OFF by more than %g %%: the CPU time is not trusted' % (100 * CONTROL_TOL)})")
+                f"{'' if controls_ok else ', OFF by more than %g %%: the CPU time is not trusted' % (100 * CONTROL_TOL)}"
+                + (f"; over linear: MEPA alone {C['time_ratio_mepa']:.3f}x, linear + EPSD {C['time_ratio_linear_epsd']:.3f}x, "
+                   f"MEPA + EPSD with eta_r = 0 {C['time_ratio_mepa_epsd_eta0']:.3f}x" if "time_ratio_mepa" in C else "")
+                + ")")
         count_ok, time_ok = C["count_ratio"] <= 1.3, C["time_ratio"] <= 1.3 and controls_ok
         status = verdict(count_ok and time_ok)
         if count_ok != time_ok:

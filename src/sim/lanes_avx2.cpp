@@ -274,13 +274,15 @@ LANES_FN void rotate_into_plane4(L3& h, const L3& n) {
   h = sel3(used, r, h);
 }
 
-/// limit_scale (core/vec3.hpp) in lanes; over: m2 > lim^2.
-LANES_FN V4 limit_scale4(const V4 m2, const V4 lim, M4& over) {
-  over = m2 > lim * lim;
-  // The division and square root only where a lane is over (lanes not over take 1; what the
-  // division gives there is not used).
-  if (_mm256_movemask_pd(__m256d(over)) == 0) return splat(1.0);
-  return sel(over, lim / sqrt4(m2), splat(1.0));
+/// h *= limit_scale(|h|^2, lim) (core/vec3.hpp) in lanes: the lanes over the limit scaled
+/// to it, the others left as they are (the scalar code multiplies them by exactly 1, which
+/// changes no bit). Returns the lanes over. The division, the square root and the products
+/// only where a lane is over: sticking contacts, most of a packing's, skip them.
+LANES_FN M4 limit4(L3& h, const V4 lim) {
+  const V4 m2 = dot3(h, h);
+  const M4 over = m2 > lim * lim;
+  if (_mm256_movemask_pd(__m256d(over)) != 0) h = h * sel(over, lim / sqrt4(m2), splat(1.0));
+  return over;
 }
 
 /// LinearRestitutionDamping / TsujiDamping::apply with apply_limit: the damping force, and
@@ -303,8 +305,7 @@ LANES_FN V4 damping4(const V4 two_beta, const M4 limit, const V4 mstar, const V4
 LANES_FN L3 spring4(L3& fs, const L3& vt, const V4 kt, const V4 dt, const V4 gamma_t, const V4 mu, const V4 fc) {
   fs = fs - vt * (kt * dt);
   L3 ft = fs - vt * gamma_t;
-  M4 slide;
-  ft = ft * limit_scale4(dot3(ft, ft), mu * fc, slide);
+  const M4 slide = limit4(ft, mu * fc);
   fs = sel3(slide, ft, fs);
   return ft;
 }
@@ -365,8 +366,7 @@ LANES_FN L3 epsd4(const Group& G, L3& mk, const EpsdCoef& c, const V4 fc, const 
   const L3 wrel = G.wi - G.wj;
   const L3 wr = wrel - G.n * dot3(G.n, wrel);
   mk = mk - wr * (c.kr * dt);
-  M4 slide;
-  mk = mk * limit_scale4(dot3(mk, mk), mu_r * G.rstar * fc, slide);
+  const M4 slide = limit4(mk, mu_r * G.rstar * fc);
   const L3 damped_m = mk - wr * c.visc;
   // eta_r = 0 leaves the spring alone (the scalar law's branch; damped_m would differ from it
   // only in the sign of a zero, or where I_r k_r is not finite).
