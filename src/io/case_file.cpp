@@ -565,9 +565,13 @@ Case parse(toml::table& root, const std::string& file) {
                                                    "coordination", "particles", "rebuilds", "bed_height",
                                                    "max_contact_force", "mean_contact_force", "mean_temperature",
                                                    "min_temperature", "max_temperature"};
-    for (const auto& p : c.output.probes)
+    for (const auto& p : c.output.probes) {
       if (std::find(known.begin(), known.end(), p) == known.end())
         s->fail("probes", "unknown probe '" + p + "'; known probes: " + Section::join(known));
+      // The contact-force probes read each pair's force, which the force loop stores only
+      // when asked to.
+      if (p == "max_contact_force" || p == "mean_contact_force") c.cfg.record_contacts = true;
+    }
     s->finish();
   }
   for (const auto& p : c.output.probes)
