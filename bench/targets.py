@@ -39,10 +39,11 @@ stay in OUT):
      calls inside one process, the ratio paired block by block; the median of its repetitions).
      Each law alternated with a second lattice of itself is the method's control: its ratio
      must come out within 3 % of 1, or the CPU-time figure is not trusted (not met). Each
-     block starts from the same histories (sticking contacts, as in a packing at rest). Beside
-     the verdict, for the reader: MEPA without rolling, the linear law with EPSD, and MEPA +
-     EPSD without EPSD's viscous part (eta_r = 0, the ring shear cases' setting), each over
-     the linear law.
+     block starts from the same histories (sticking contacts, as in a packing at rest); the
+     verdict is on these. Beside it, for the reader: MEPA without rolling, the linear law
+     with EPSD, and MEPA + EPSD without EPSD's viscous part (eta_r = 0, the ring shear cases'
+     setting), each over the linear law; and the target's pair with every contact sliding
+     (BM_ForceAlternateSliding: a bed that shears), with its linear control.
 
 Each target is judged on this invocation's figures only: "met" or "not met". Timings on a
 shared VM move from run to run (docs/performance.md quotes several invocations); the JSON
@@ -160,17 +161,19 @@ def contacts(a, out):
     fa = os.path.join(out, "force_alternate.json")
     ok = run([sys.executable, os.path.join(HERE, "contact_instructions.py"), "--models", "linear,mepa+epsd",
               "--iters", str(a.iters), "--bench", a.bench, "--json", ci], os.path.join(out, "contact_instructions.log"))
-    ok = run([a.bench, "--benchmark_filter=BM_ForceAlternate/", f"--benchmark_min_time={a.min_time}",
+    ok = run([a.bench, "--benchmark_filter=BM_ForceAlternate(Sliding)?/", f"--benchmark_min_time={a.min_time}",
               f"--benchmark_repetitions={a.rounds}", "--benchmark_enable_random_interleaving=true",
               f"--benchmark_out={fa}"],
              os.path.join(out, "force_alternate.log")) and ok
     if not ok:
         return None
     ipc = json.load(open(ci))["instructions_per_contact"]
-    reps = {}  # "a/b" -> the iteration runs (one per repetition)
+    reps = {}  # "a/b" (sticking) or "sliding:a/b" -> the iteration runs (one per repetition)
     for b in json.load(open(fa))["benchmarks"]:
         if b.get("run_type", "iteration") == "iteration" and "ratio" in b:
-            reps.setdefault("/".join(b["name"].split("/")[1:3]), []).append(b)
+            parts = b["name"].split("/")
+            key = ("sliding:" if parts[0].endswith("Sliding") else "") + "/".join(parts[1:3])
+            reps.setdefault(key, []).append(b)
     med = lambda key, field: statistics.median(r[field] for r in reps[key])
     return {"instructions_linear": ipc["linear"], "instructions_mepa_epsd": ipc["mepa+epsd"],
             "count_ratio": ipc["mepa+epsd"] / ipc["linear"],
@@ -185,7 +188,10 @@ def contacts(a, out):
             # for the reader: which part of the law costs what, over the linear law
             "time_ratio_mepa": med("linear/mepa", "ratio"),
             "time_ratio_linear_epsd": med("linear/linear+epsd", "ratio"),
-            "time_ratio_mepa_epsd_eta0": med("linear/mepa+epsd0", "ratio")}
+            "time_ratio_mepa_epsd_eta0": med("linear/mepa+epsd0", "ratio"),
+            # every contact sliding (a shearing bed): the same pair and the linear control
+            "time_ratio_sliding": med("sliding:linear/mepa+epsd", "ratio"),
+            "control_linear_sliding": med("sliding:linear/linear", "ratio")}
 
 
 def verdict(ok):
@@ -275,6 +281,8 @@ def table(got):
                 f"{'' if controls_ok else ', OFF by more than %g %%: the CPU time is not trusted' % (100 * CONTROL_TOL)}"
                 + (f"; over linear: MEPA alone {C['time_ratio_mepa']:.3f}x, linear + EPSD {C['time_ratio_linear_epsd']:.3f}x, "
                    f"MEPA + EPSD with eta_r = 0 {C['time_ratio_mepa_epsd_eta0']:.3f}x" if "time_ratio_mepa" in C else "")
+                + (f"; with every contact sliding {C['time_ratio_sliding']:.3f}x (control "
+                   f"{C['control_linear_sliding']:.3f})" if "time_ratio_sliding" in C else "")
                 + ")")
         count_ok, time_ok = C["count_ratio"] <= 1.3, C["time_ratio"] <= 1.3 and controls_ok
         status = verdict(count_ok and time_ok)

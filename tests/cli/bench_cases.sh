@@ -233,7 +233,8 @@ ok = ok and all(v['ceiling_mean_core'] > 0 for v in S['speedup'].values())
 C = t['figures'].get('contacts')
 ok = ok and (C is None or (1.0 < C['count_ratio'] < 3.0 and 0.5 < C['time_ratio'] < 3.0 and C['blocks'] > 0
                            and all(0.5 < C[k] < 2.0 for k in ('control_linear', 'control_mepa_epsd'))
-                           and all(0.5 < C[k] < 3.0 for k in ('time_ratio_mepa', 'time_ratio_linear_epsd', 'time_ratio_mepa_epsd_eta0'))))
+                           and all(0.5 < C[k] < 3.0 for k in ('time_ratio_mepa', 'time_ratio_linear_epsd', 'time_ratio_mepa_epsd_eta0',
+                                                              'time_ratio_sliding', 'control_linear_sliding'))))
 L, FL = json.load(open('$work/tg/scaling/scaling.json'))['lammps'], S['flatness']['lammps']
 close = lambda x, y: abs(x - y) <= 1e-9 * abs(y)
 ok = ok and close(FL['ratio_median'], 2.5) and close(FL['ns_small'], 20) and close(FL['ns_large'], 50)
