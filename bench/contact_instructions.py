@@ -18,7 +18,8 @@ The AVX2 screening and lanes run where the CPU has AVX2 (as in a run); COHDEM_SI
 environment counts the portable scalar code instead.
 
 valgrind 3.19 (Debian 12) does not decode AVX-512: the benchmark binary must be the
-project's portable build (it is: no -march). Python 3 standard library only.
+project's portable build (it is: no -march), and the CPU valgrind presents has no AVX-512,
+so the count is of the four AVX2 lanes even where a run takes the eight AVX-512 ones. Python 3 standard library only.
 """
 import argparse
 import json

@@ -185,7 +185,10 @@ void BM_Force(benchmark::State& st, ModelCase mc) {
 /// the median over the iterations of B's CPU time per call over A's in the same iteration
 /// (ratio_q1, ratio_q3: its quartiles); a_ms, b_ms: the median CPU time per call.
 constexpr int kSlideCalls = 1500;
-void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const int load_calls) {
+/// widths: A's blocks on the AVX2 paths (four lanes) and B's on the AVX-512 ones (eight lanes,
+/// the screening eight entries at a time), else both on the default.
+void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const int load_calls,
+                         const bool widths = false) {
   const int n = int(st.range(0));
   std::unique_ptr<ForceLoop> A, B;
   try {
@@ -201,13 +204,16 @@ void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const i
   }
   constexpr int kBlock = 4;  // calls per block, the first untimed
   std::vector<double> ratio, ta, tb;
+  const bool wide0 = screen_avx512_enabled();
   for (auto _ : st) {
     double sa = 0, sb = 0;
+    if (widths) set_screen_avx512(false);
     A->restore();
     for (int c = 0; c < kBlock; ++c) {
       const double t = A->call();
       if (c > 0) sa += t;
     }
+    if (widths) set_screen_avx512(true);
     B->restore();
     for (int c = 0; c < kBlock; ++c) {
       const double t = B->call();
@@ -217,6 +223,7 @@ void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const i
     ta.push_back(sa / (kBlock - 1));
     tb.push_back(sb / (kBlock - 1));
   }
+  set_screen_avx512(wide0);
   auto quantile = [](std::vector<double> v, const double q) {
     std::sort(v.begin(), v.end());
     const double x = q * double(v.size() - 1);
@@ -230,11 +237,16 @@ void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const i
   st.counters["a_ms"] = 1e3 * quantile(ta, 0.5);
   st.counters["b_ms"] = 1e3 * quantile(tb, 0.5);
   st.counters["blocks"] = double(ratio.size());
+  // the contact lanes the default path runs (8: AVX-512, 4: AVX2, 0: scalar; widths: both)
+  st.counters["lanes"] = widths ? 0.0 : screen_avx512_enabled() ? 8.0 : screen_avx2_enabled() ? 4.0 : 0.0;
 }
 void BM_ForceAlternate(benchmark::State& st, ModelCase a, ModelCase b) { BM_ForceAlternateIn(st, a, b, 0); }
 void BM_ForceAlternateSliding(benchmark::State& st, ModelCase a, ModelCase b) {
   BM_ForceAlternateIn(st, a, b, kSlideCalls);
 }
+/// One law in four AVX2 lanes (a) and in eight AVX-512 lanes (b), two lattices of it
+/// alternated block by block: ratio is the eight lanes' time over the four lanes'.
+void BM_LaneWidths(benchmark::State& st, ModelCase mc) { BM_ForceAlternateIn(st, mc, mc, 0, true); }
 
 /// A whole step (integration, rebuild check, forces) on the lattice.
 void BM_Step(benchmark::State& st, ModelCase mc) {
@@ -458,6 +470,12 @@ void register_all() {
                                        BM_ForceAlternateSliding, a, b))
         ->Arg(32)->Unit(benchmark::kMillisecond);
   }
+  // Where the CPU has AVX-512: each law with lanes in four and in eight lanes.
+  if (avx512_available())
+    for (const auto& c : {ModelCase{"linear", "none"}, ModelCase{"linear", "epsd"}, ModelCase{"hertz_mindlin", "epsd"},
+                          ModelCase{"mepa", "none"}, ModelCase{"mepa", "epsd"}})
+      iters(benchmark::RegisterBenchmark(("BM_LaneWidths/" + tag_of(c)).c_str(), BM_LaneWidths, c))
+          ->Arg(32)->Unit(benchmark::kMillisecond);
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_CaseScreen", BM_CaseScreen)->Unit(benchmark::kMicrosecond);
   iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))

@@ -34,8 +34,10 @@ stay in OUT):
      is cohdem's alone).
   4. MEPA n = 3/2 with EPSD rolling resistance at most 1.3x the linear model, on identical
      contacts (the force loop of cohdem_bench's BM_Force lattice): counted instructions per
-     contact (bench/contact_instructions.py, callgrind: the same on any machine) and CPU time
-     (cohdem_bench's BM_ForceAlternate: the two force loops alternated in blocks of a few
+     contact (bench/contact_instructions.py, callgrind: the same on any machine, of the four
+     AVX2 lanes, since valgrind presents a CPU without AVX-512) and CPU time (of the lanes the
+     machine runs: eight in AVX-512 where it has them, said beside the figure;
+     cohdem_bench's BM_ForceAlternate: the two force loops alternated in blocks of a few
      calls inside one process, the ratio paired block by block; the median of its repetitions).
      Each law alternated with a second lattice of itself is the method's control: its ratio
      must come out within 3 % of 1, or the CPU-time figure is not trusted (not met). Each
@@ -183,6 +185,7 @@ def contacts(a, out):
             "time_ratio_repetitions": [r["ratio"] for r in reps["linear/mepa+epsd"]],
             "time_ratio_quartiles": [med("linear/mepa+epsd", "ratio_q1"), med("linear/mepa+epsd", "ratio_q3")],
             "blocks": sum(int(r["blocks"]) for r in reps["linear/mepa+epsd"]),
+            "lanes": int(reps["linear/mepa+epsd"][0].get("lanes", 0)),  # 8 (AVX-512), 4 (AVX2), 0 (scalar)
             "control_linear": med("linear/linear", "ratio"),
             "control_mepa_epsd": med("mepa+epsd/mepa+epsd", "ratio"),
             # for the reader: which part of the law costs what, over the linear law
@@ -273,7 +276,8 @@ def table(got):
     if C:
         controls_ok = all(abs(C[k] - 1.0) <= CONTROL_TOL for k in ("control_linear", "control_mepa_epsd"))
         meas = (f"counted **{C['count_ratio']:.3f}x** ({C['instructions_mepa_epsd']:.1f} against "
-                f"{C['instructions_linear']:.1f} instructions per contact); CPU time **{C['time_ratio']:.3f}x** "
+                f"{C['instructions_linear']:.1f} instructions per contact, the four AVX2 lanes: valgrind has no AVX-512); "
+                f"CPU time **{C['time_ratio']:.3f}x** ({str(C['lanes']) + ' lanes' if C.get('lanes') else 'the scalar law'}) "
                 f"(the force loops alternated in one process, paired block by block: quartiles "
                 f"{C['time_ratio_quartiles'][0]:.2f}-{C['time_ratio_quartiles'][1]:.2f}x; "
                 f"{C['time_mepa_epsd_s'] * 1e3:.2f} against {C['time_linear_s'] * 1e3:.2f} ms per force call; "

@@ -302,9 +302,10 @@ int run_case(Case c, const RunOptions& opt) {
                               : !s.pairs_fit_size()
                                   ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
                                   : "where the run allows (summary.json: step_pairs)";
-    spdlog::info("force loop: {} thread(s), list screening {}, two steps per sweep {}", nt,
-                 screen_avx512_enabled() ? "AVX-512 (COHDEM_SIMD=avx2 selects the AVX2 one, COHDEM_SIMD=0 the scalar one)"
-                 : screen_avx2_enabled() ? "AVX2 (COHDEM_SIMD=0 selects the scalar one)"
+    spdlog::info("force loop: {} thread(s), list screening and contact lanes {}, two steps per sweep {}", nt,
+                 screen_avx512_enabled()
+                     ? "AVX-512, eight at a time (COHDEM_SIMD=avx2 selects AVX2, four, COHDEM_SIMD=0 the scalar code)"
+                 : screen_avx2_enabled() ? "AVX2, four at a time (COHDEM_SIMD=0 selects the scalar code)"
                                          : "scalar",
                  pairs);
     if (s.serial_blocks() && nt > 1)

@@ -282,7 +282,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         }
       };
       // Laws with lanes (sim/lanes.hpp: the linear law, Hertz-Mindlin and MEPA with EPSD
-      // rolling): their contacts four at a time in AVX2 lanes (the same results bit for bit),
+      // rolling): their contacts four at a time in AVX2 lanes, or eight in AVX-512 ones where
+      // the screening is (wide), the same results bit for bit,
       // kLaneChunk per call, whose results are then added one contact at a time in list
       // order. The next chunk's records are asked for while one is evaluated.
       if constexpr (Lanes::kHave) {
@@ -293,7 +294,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           for (uint32_t h0 = 0; h0 < nh; h0 += kLaneChunk) {
             const uint32_t cnt = std::min(kLaneChunk, nh - h0);
             for (uint32_t h = h0 + kLaneChunk; h < std::min(nh, h0 + 2 * kLaneChunk); ++h) pf(h);
-            Lanes::eval(lin, hits, h0, cnt, lo);
+            if (wide)
+              Lanes::eval8(lin, hits, h0, cnt, lo);
+            else
+              Lanes::eval(lin, hits, h0, cnt, lo);
             for (uint32_t q = 0; q < cnt; ++q) {
               const uint32_t k = hk[h0 + q];
               put(k, hrow[h0 + q], jdx[k], lo.alive[q] != 0, Vec3{lo.fx[q], lo.fy[q], lo.fz[q]},

@@ -1,10 +1,11 @@
 // Contacts evaluated four at a time, one per lane of an AVX2 register ("lanes of contacts"),
+// or eight at a time in AVX-512 registers where the CPU has them (lanes_avx512.cpp),
 // for the linear law (LAMMPS's chute, the poured packing), Hertz-Mindlin (the chute's
 // `granular hmr` variant, the packed beds) and MEPA (the ring shear tester's law; where every
 // material pair has fixed stiffnesses, n = 1 or 3/2 and no dp_shift: lane_usable, other MEPA
 // settings run the scalar law), each with rolling resistance `none` or `epsd` and no
 // twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
-// the touching ones are then evaluated here in groups of four, and the loop adds their
+// the touching ones are then evaluated here in groups of four (eight), and the loop adds their
 // results to the particles' sums one contact at a time, in list order.
 //
 // The lanes do the operations of the law's ContactLaw::evaluate and of the kernel's geometry,
@@ -168,6 +169,14 @@ void hertz_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, 
 void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void mepa_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+/// The same eight at a time in AVX-512 registers (lanes_avx512.cpp): call them only when
+/// screen_avx512_enabled(). The same results bit for bit.
+void linear_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void linear_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void hertz_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void hertz_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void mepa_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+void mepa_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 
 /// Which laws have lanes, with their lane parameters and evaluation, and whether a material
 /// pair's settings can take them (usable: all pairs must; ContactModelImpl::set_params).
@@ -176,27 +185,28 @@ struct LaneLaw {
   static constexpr bool kHave = false;
   using Params = char;
 };
-template <class Law, class P, LaneEval kEval>
+template <class Law, class P, LaneEval kEval, LaneEval kEval8>
 struct LaneLawOf {
   static constexpr bool kHave = true;
   using Params = LaneParamsOf<P>;
-  static constexpr LaneEval eval = kEval;
+  static constexpr LaneEval eval = kEval;    ///< four lanes, AVX2
+  static constexpr LaneEval eval8 = kEval8;  ///< eight lanes, AVX-512
   static bool usable(const typename Law::Params&) { return true; }
 };
 template <>
-struct LaneLaw<LinearLaw> : LaneLawOf<LinearLaw, LinearLaneParams, linear_lanes_avx2> {};
+struct LaneLaw<LinearLaw> : LaneLawOf<LinearLaw, LinearLaneParams, linear_lanes_avx2, linear_lanes_avx512> {};
 template <>
-struct LaneLaw<LinearEpsdLaw> : LaneLawOf<LinearEpsdLaw, LinearLaneParams, linear_epsd_lanes_avx2> {};
+struct LaneLaw<LinearEpsdLaw> : LaneLawOf<LinearEpsdLaw, LinearLaneParams, linear_epsd_lanes_avx2, linear_epsd_lanes_avx512> {};
 template <>
-struct LaneLaw<HertzLaw> : LaneLawOf<HertzLaw, HertzLaneParams, hertz_lanes_avx2> {};
+struct LaneLaw<HertzLaw> : LaneLawOf<HertzLaw, HertzLaneParams, hertz_lanes_avx2, hertz_lanes_avx512> {};
 template <>
-struct LaneLaw<HertzEpsdLaw> : LaneLawOf<HertzEpsdLaw, HertzLaneParams, hertz_epsd_lanes_avx2> {};
+struct LaneLaw<HertzEpsdLaw> : LaneLawOf<HertzEpsdLaw, HertzLaneParams, hertz_epsd_lanes_avx2, hertz_epsd_lanes_avx512> {};
 template <>
-struct LaneLaw<MepaLaw> : LaneLawOf<MepaLaw, MepaLaneParams, mepa_lanes_avx2> {
+struct LaneLaw<MepaLaw> : LaneLawOf<MepaLaw, MepaLaneParams, mepa_lanes_avx2, mepa_lanes_avx512> {
   static bool usable(const MepaLaw::Params& p) { return lane_usable(p); }
 };
 template <>
-struct LaneLaw<MepaEpsdLaw> : LaneLawOf<MepaEpsdLaw, MepaLaneParams, mepa_epsd_lanes_avx2> {
+struct LaneLaw<MepaEpsdLaw> : LaneLawOf<MepaEpsdLaw, MepaLaneParams, mepa_epsd_lanes_avx2, mepa_epsd_lanes_avx512> {
   static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
 };
 

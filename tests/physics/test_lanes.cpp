@@ -218,8 +218,9 @@ bool on_lanes_of(const Law law, const System& s) {
 
 // One force evaluation, scalar and in lanes, from the same state with histories set by hand
 // on every entry that touches and on some that do not (marked live: the law must end them).
-void contact_by_contact(Law law) {
-  const bool was = screen_avx2_enabled();
+void contact_by_contact(Law law, bool wide) {
+  const bool was = screen_avx2_enabled(), was_wide = screen_avx512_enabled();
+  set_screen_avx512(wide);
   auto s = make_bed(law, 1);
   ASSERT_TRUE(on_lanes_of(law, *s));
   s->run(3000);  // settling: contacts with histories, frozen partners, images
@@ -282,6 +283,7 @@ void contact_by_contact(Law law) {
   s->particles.torque = t0;
   const Result b = force_call(*s, true);
   set_screen_avx2(was);
+  set_screen_avx512(was_wide);
   // Coverage: the bed must reach what it is meant to. A spring cut to its limit is at least
   // halved here (sliding); a stiffness that fell scales the spring by kt/kt_prev.
   std::vector<std::byte> h0 = hist0;
@@ -333,8 +335,9 @@ void contact_by_contact(Law law) {
 
 // Whole runs (800 steps of the bed settling: thousands of contact-steps), scalar and in
 // lanes, on one and two threads.
-void whole_runs(Law law) {
-  const bool was = screen_avx2_enabled();
+void whole_runs(Law law, bool wide) {
+  const bool was = screen_avx2_enabled(), was_wide = screen_avx512_enabled();
+  set_screen_avx512(wide);
   Result r[2][2];
   size_t contacts = 0;
   for (int lanes = 0; lanes < 2; ++lanes)
@@ -347,6 +350,7 @@ void whole_runs(Law law) {
       contacts = c;
     }
   set_screen_avx2(was);
+  set_screen_avx512(was_wide);
   omp_set_num_threads(1);
   std::printf("[info] lanes, whole runs: %zu pair contact-steps\n", contacts);
   EXPECT_GT(contacts, 20000u);
@@ -360,14 +364,24 @@ void whole_runs(Law law) {
 
 }  // namespace
 
-#define COHDEM_LANES_TESTS(Name, law)                                                              \
-  TEST(Lanes, Name##ContactByContactAsTheScalarLaw) {                                             \
-    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone"; \
-    contact_by_contact(law);                                                                      \
-  }                                                                                               \
-  TEST(Lanes, Name##RunsAsTheScalarLawOnOneAndTwoThreads) {                                       \
-    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone"; \
-    whole_runs(law);                                                                              \
+// Each law in four AVX2 lanes and, where the CPU has AVX-512, in eight (the screening then
+// eight entries at a time as well: both are chosen by screen_avx512_enabled).
+#define COHDEM_LANES_TESTS(Name, law)                                                                \
+  TEST(Lanes, Name##ContactByContactAsTheScalarLaw) {                                               \
+    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";   \
+    contact_by_contact(law, false);                                                                 \
+  }                                                                                                 \
+  TEST(Lanes, Name##RunsAsTheScalarLawOnOneAndTwoThreads) {                                         \
+    if (!avx2_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the scalar law runs alone";   \
+    whole_runs(law, false);                                                                         \
+  }                                                                                                 \
+  TEST(Lanes, Name##InEightLanesContactByContactAsTheScalarLaw) {                                   \
+    if (!avx512_available()) GTEST_SKIP() << "no AVX-512 on this CPU or build: four lanes run alone"; \
+    contact_by_contact(law, true);                                                                  \
+  }                                                                                                 \
+  TEST(Lanes, Name##InEightLanesRunsAsTheScalarLawOnOneAndTwoThreads) {                             \
+    if (!avx512_available()) GTEST_SKIP() << "no AVX-512 on this CPU or build: four lanes run alone"; \
+    whole_runs(law, true);                                                                          \
   }
 COHDEM_LANES_TESTS(LinearLaw, Law::Linear)
 COHDEM_LANES_TESTS(LinearEpsd, Law::LinearEpsd)
