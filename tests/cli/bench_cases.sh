@@ -232,6 +232,7 @@ ok = len(t['table']) == $tg_rows and len(S['identical']) == 4 and all(v['identic
 ok = ok and all(v['ceiling_mean_core'] > 0 for v in S['speedup'].values())
 C = t['figures'].get('contacts')
 ok = ok and (C is None or (1.0 < C['count_ratio'] < 3.0 and 0.5 < C['time_ratio'] < 3.0 and C['blocks'] > 0
+                           and C['lanes'] in (0, 4, 8)
                            and all(0.5 < C[k] < 2.0 for k in ('control_linear', 'control_mepa_epsd'))
                            and all(0.5 < C[k] < 3.0 for k in ('time_ratio_mepa', 'time_ratio_linear_epsd', 'time_ratio_mepa_epsd_eta0',
                                                               'time_ratio_sliding', 'control_linear_sliding'))))
