@@ -237,8 +237,8 @@ void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const i
   st.counters["a_ms"] = 1e3 * quantile(ta, 0.5);
   st.counters["b_ms"] = 1e3 * quantile(tb, 0.5);
   st.counters["blocks"] = double(ratio.size());
-  // the contact lanes the default path runs (8: AVX-512, 4: AVX2, 0: scalar; widths: both)
-  st.counters["lanes"] = widths ? 0.0 : screen_avx512_enabled() ? 8.0 : screen_avx2_enabled() ? 4.0 : 0.0;
+  // the contact lanes the default path ran (8: AVX-512, 4: AVX2, 0: scalar)
+  if (!widths) st.counters["lanes"] = screen_avx512_enabled() ? 8.0 : screen_avx2_enabled() ? 4.0 : 0.0;
 }
 void BM_ForceAlternate(benchmark::State& st, ModelCase a, ModelCase b) { BM_ForceAlternateIn(st, a, b, 0); }
 void BM_ForceAlternateSliding(benchmark::State& st, ModelCase a, ModelCase b) {

@@ -163,20 +163,22 @@ struct LaneOut {
 /// update their histories (records of contacts that ended are the caller's to reset: see
 /// LaneOut). AVX2 only: call when screen_avx2_enabled().
 using LaneEval = void (*)(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void linear_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void linear_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void hertz_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void hertz_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void mepa_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void mepa_epsd_lanes_avx2(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-/// The same eight at a time in AVX-512 registers (lanes_avx512.cpp): call them only when
-/// screen_avx512_enabled(). The same results bit for bit.
-void linear_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void linear_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void hertz_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void hertz_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void mepa_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
-void mepa_epsd_lanes_avx512(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+/// The entry points, one list for both widths: X(law, suffix, rolling, width) for each law
+/// with lanes, naming law##suffix##_lanes_##width (linear_lanes_avx2, mepa_epsd_lanes_avx512,
+/// ...); lanes_body.hpp defines them from the law's group (law##_group) with EPSD rolling or
+/// without. The eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit
+/// for bit): call them only when screen_avx512_enabled().
+#define COHDEM_LANE_ENTRIES(X, width)                                                          \
+  X(linear, , false, width) X(linear, _epsd, true, width) X(hertz, , false, width)              \
+  X(hertz, _epsd, true, width) X(mepa, , false, width) X(mepa, _epsd, true, width)
+#define COHDEM_LANE_DECLARE(law, suffix, rolling, width) \
+  void law##suffix##_lanes_##width(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
+/// Where the build is not for x86-64: entries that are never called (screen_avx2_enabled()
+/// is false there).
+#define COHDEM_LANE_STUB(law, suffix, rolling, width) \
+  void law##suffix##_lanes_##width(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+COHDEM_LANE_ENTRIES(COHDEM_LANE_DECLARE, avx2)
+COHDEM_LANE_ENTRIES(COHDEM_LANE_DECLARE, avx512)
 
 /// Which laws have lanes, with their lane parameters and evaluation, and whether a material
 /// pair's settings can take them (usable: all pairs must; ContactModelImpl::set_params).

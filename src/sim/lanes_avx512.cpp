@@ -123,22 +123,11 @@ LANES_FN M par_load(const LaneParamsOf<T>* u, uint64_t T::*m) {
 
 }  // namespace
 
-COHDEM_LANES_ENTRY(linear_lanes_avx512, linear_group, false)
-COHDEM_LANES_ENTRY(linear_epsd_lanes_avx512, linear_group, true)
-COHDEM_LANES_ENTRY(hertz_lanes_avx512, hertz_group, false)
-COHDEM_LANES_ENTRY(hertz_epsd_lanes_avx512, hertz_group, true)
-COHDEM_LANES_ENTRY(mepa_lanes_avx512, mepa_group, false)
-COHDEM_LANES_ENTRY(mepa_epsd_lanes_avx512, mepa_group, true)
-#undef COHDEM_LANES_ENTRY
+COHDEM_LANE_ENTRIES(COHDEM_LANE_DEFINE, avx512)
 
 #else
 
-void linear_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
-void linear_epsd_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
-void hertz_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
-void hertz_epsd_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
-void mepa_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
-void mepa_epsd_lanes_avx512(const LaneInput&, const ScreenHits&, uint32_t, uint32_t, LaneOut&) {}
+COHDEM_LANE_ENTRIES(COHDEM_LANE_STUB, avx512)
 
 #endif
 

@@ -505,11 +505,12 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   }
 }
 
-/// The entry points: name##LANES_SUFFIX (lanes.hpp) for each law, with and without EPSD.
-#define COHDEM_LANES_ENTRY(name, group, roll)                                                                          \
-  __attribute__((target(LANES_TARGET))) void name(const LaneInput& in, const ScreenHits& hits, const uint32_t h0,      \
-                                                  const uint32_t cnt, LaneOut& out) {                                   \
-    drive<group<true, roll>, group<false, roll>>(in, hits, h0, cnt, out);                                              \
+/// An entry point of lanes.hpp's list (COHDEM_LANE_ENTRIES), outside the includer's
+/// anonymous namespace: the law's group, uniform and mixed, over a chunk.
+#define COHDEM_LANE_DEFINE(law, suffix, rolling, width)                                                    \
+  __attribute__((target(LANES_TARGET))) void law##suffix##_lanes_##width(                                  \
+      const LaneInput& in, const ScreenHits& hits, const uint32_t h0, const uint32_t cnt, LaneOut& out) {   \
+    drive<law##_group<true, rolling>, law##_group<false, rolling>>(in, hits, h0, cnt, out);                \
   }
 
 #undef LANES_LAMBDA
