@@ -166,6 +166,9 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
       P.inertia.size() != n || P.x.size() != n || P.v.size() != n || P.omega.size() != n || P.force.size() != n ||
       P.torque.size() != n)
     bad("particle arrays");
+  // Every particle is a solid sphere (sphere_inertia), which the contact lanes rely on.
+  for (size_t i = 0; i < n; ++i)
+    if (P.inertia[i] != sphere_inertia(P.mass[i], P.radius[i])) bad("moments of inertia (2/5 m r^2)");
   // The thermal fields: written by runs that keep them (ParticleStore::enable_thermal),
   // empty otherwise. A thermal case resuming a mechanical run's checkpoint starts every
   // particle at its initial temperature, with its current radius as the reference; a

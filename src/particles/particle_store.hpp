@@ -15,6 +15,12 @@ enum ParticleFlag : uint8_t {
   kAttached = 2,  ///< rigidly carried by wall `body[i]` (ribs, glued rough layers)
 };
 
+/// A particle's moment of inertia: every particle is a solid sphere, I = 2/5 m r^2. Its one
+/// formula: ParticleStore::add and the thermal expansion store it, checkpoints are checked
+/// against it, and the contact lanes (sim/lanes_body.hpp's rolling_inertia4) compute it in
+/// the same order, bit for bit, instead of gathering the partners' inertias.
+inline double sphere_inertia(const double m, const double r) { return 0.4 * m * r * r; }
+
 struct ParticleStore {
   std::vector<uint64_t> id;
   std::vector<int32_t> species;
@@ -68,7 +74,7 @@ struct ParticleStore {
     radius.push_back(r);
     const double m = density * 4.0 / 3.0 * M_PI * r * r * r;
     mass.push_back(m);
-    inertia.push_back(0.4 * m * r * r);
+    inertia.push_back(sphere_inertia(m, r));
     x.push_back(pos);
     v.push_back(vel);
     omega.push_back(w);

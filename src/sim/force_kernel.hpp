@@ -288,7 +288,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // order. The next chunk's records are asked for while one is evaluated.
       if constexpr (Lanes::kHave) {
         if (simd && lane_p != nullptr) {
-          const LaneInput lin{jdx, v, omega, radius, mass, inertia, flag, species, lane_p, nmat, hs, dt, want_a};
+          const LaneInput lin{jdx, v, omega, radius, mass, flag, species, lane_p, nmat, hs, dt, want_a};
           for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
           LaneOut lo;
           for (uint32_t h0 = 0; h0 < nh; h0 += kLaneChunk) {

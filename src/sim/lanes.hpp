@@ -136,8 +136,7 @@ struct LaneInput {
   const Vec3* v;
   const Vec3* omega;
   const double* radius;
-  const double* mass;
-  const double* inertia;
+  const double* mass;  ///< (the inertias are not read: sphere_inertia of mass and radius)
   const uint8_t* flag;
   const int32_t* species;
   const void* params;

@@ -164,7 +164,7 @@ void ThermalModel::update(System& s, bool integrate) {
     P.temperature[i] += (Q + Ps) * dt / mc;
     if (set_.expansion && alpha_[si] != 0) {
       P.radius[i] = P.radius0[i] * (1.0 + alpha_[si] * (P.temperature[i] - tref_[si]));
-      P.inertia[i] = 0.4 * P.mass[i] * P.radius[i] * P.radius[i];
+      P.inertia[i] = sphere_inertia(P.mass[i], P.radius[i]);
     }
   };
   if (par) {

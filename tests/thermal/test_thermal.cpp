@@ -155,6 +155,8 @@ TEST(Thermal, FreeParticleExpandsWithConstantMass) {
   EXPECT_DOUBLE_EQ(s->particles.radius0[0], r0);
   EXPECT_DOUBLE_EQ(s->particles.mass[0], m0);
   EXPECT_NEAR(s->particles.inertia[0], 0.4 * m0 * std::pow(r0 * (1 + alpha * dT), 2), 1e-20);
+  // bit for bit the solid sphere's formula, which the contact lanes compute instead of reading
+  EXPECT_EQ(s->particles.inertia[0], sphere_inertia(s->particles.mass[0], s->particles.radius[0]));
   EXPECT_NEAR(s->thermal->source_power, P * m0, 1e-9 * P * m0);
   // Cooling below the reference temperature shrinks it.
   s->thermal = std::make_shared<ThermalModel>(

@@ -9,6 +9,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include "../physics/fixture.hpp"
 #include "io/checkpoint.hpp"
@@ -146,6 +148,40 @@ TEST(Checkpoint, RejectsCorruptLengthBeforeAllocating) {
     ADD_FAILURE() << "a corrupt length was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
+// Every particle is a solid sphere (sphere_inertia), which the contact lanes rely on instead
+// of reading the inertias: a checkpoint whose inertia is not 2/5 m r^2 of its particle's mass
+// and radius (a damaged or foreign file) is refused, naming the file and the field.
+TEST(Checkpoint, RejectsInertiaThatIsNotTheSpheres) {
+  auto a = setup();
+  a->add_particle(0, 5e-4, {0.005, 0, 0.001});
+  a->prepare();
+  const double I = a->particles.inertia[0];
+  ASSERT_EQ(I, sphere_inertia(a->particles.mass[0], a->particles.radius[0]));
+  const auto path = std::filesystem::temp_directory_path() / ("cohdem_test_checkpoint5_" + std::to_string(::getpid()) + ".bin");
+  write_checkpoint(path, *a);
+  {  // the inertia's 8 bytes, found in the file, replaced by 1.5 I
+    std::ifstream f(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    const std::string pat(reinterpret_cast<const char*>(&I), sizeof I);
+    const size_t at = bytes.find(pat);
+    ASSERT_NE(at, std::string::npos);
+    ASSERT_EQ(bytes.find(pat, at + 1), std::string::npos) << "the inertia's bytes are not unique in the file";
+    const double bad = 1.5 * I;
+    bytes.replace(at, sizeof bad, reinterpret_cast<const char*>(&bad), sizeof bad);
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  }
+  auto b = setup();
+  try {
+    read_checkpoint(path, *b);
+    ADD_FAILURE() << "an inertia that is not the sphere's was accepted";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("moments of inertia"), std::string::npos) << m;
+    EXPECT_NE(m.find(path.filename().string()), std::string::npos) << m;
   }
   std::filesystem::remove(path);
 }
