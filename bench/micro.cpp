@@ -172,6 +172,26 @@ void BM_Force(benchmark::State& st, ModelCase mc) {
   st.counters["particles"] = double(s.particles.size());
 }
 
+/// The q-quantile of v (linear between order statistics).
+double quantile(std::vector<double> v, const double q) {
+  std::sort(v.begin(), v.end());
+  const double x = q * double(v.size() - 1);
+  const size_t i = size_t(x);
+  return i + 1 < v.size() ? v[i] + (x - double(i)) * (v[i + 1] - v[i]) : v.back();
+}
+/// The alternating benchmarks' counters: ratio (the median of B's time over A's, block pair
+/// by block pair), ratio_q1 and ratio_q3 (its quartiles), a_ms and b_ms (the median times per
+/// call), blocks.
+void ratio_counters(benchmark::State& st, const std::vector<double>& ratio, const std::vector<double>& ta,
+                    const std::vector<double>& tb) {
+  st.counters["ratio"] = quantile(ratio, 0.5);
+  st.counters["ratio_q1"] = quantile(ratio, 0.25);
+  st.counters["ratio_q3"] = quantile(ratio, 0.75);
+  st.counters["a_ms"] = 1e3 * quantile(ta, 0.5);
+  st.counters["b_ms"] = 1e3 * quantile(tb, 0.5);
+  st.counters["blocks"] = double(ratio.size());
+}
+
 /// Two models' force loops (BM_Force's lattice) alternated in one process, in blocks of a few
 /// calls each: the ratio of their costs on a shared machine, where the host's load drifts
 /// over seconds and separate runs (micro_table.py's rounds) pair badly. Each iteration is one
@@ -224,19 +244,8 @@ void BM_ForceAlternateIn(benchmark::State& st, ModelCase a, ModelCase b, const i
     tb.push_back(sb / (kBlock - 1));
   }
   set_screen_avx512(wide0);
-  auto quantile = [](std::vector<double> v, const double q) {
-    std::sort(v.begin(), v.end());
-    const double x = q * double(v.size() - 1);
-    const size_t i = size_t(x);
-    return i + 1 < v.size() ? v[i] + (x - double(i)) * (v[i + 1] - v[i]) : v.back();
-  };
   if (ratio.empty()) return;
-  st.counters["ratio"] = quantile(ratio, 0.5);
-  st.counters["ratio_q1"] = quantile(ratio, 0.25);
-  st.counters["ratio_q3"] = quantile(ratio, 0.75);
-  st.counters["a_ms"] = 1e3 * quantile(ta, 0.5);
-  st.counters["b_ms"] = 1e3 * quantile(tb, 0.5);
-  st.counters["blocks"] = double(ratio.size());
+  ratio_counters(st, ratio, ta, tb);
   // the contact lanes the default path ran (8: AVX-512, 4: AVX2, 0: scalar)
   if (!widths) st.counters["lanes"] = screen_avx512_enabled() ? 8.0 : screen_avx2_enabled() ? 4.0 : 0.0;
 }
@@ -247,6 +256,45 @@ void BM_ForceAlternateSliding(benchmark::State& st, ModelCase a, ModelCase b) {
 /// One law in four AVX2 lanes (a) and in eight AVX-512 lanes (b), two lattices of it
 /// alternated block by block: ratio is the eight lanes' time over the four lanes'.
 void BM_LaneWidths(benchmark::State& st, ModelCase mc) { BM_ForceAlternateIn(st, mc, mc, 0, true); }
+
+/// The force loop's prefetch of the touching entries' records (force_loop_prefetches) off (A)
+/// and on (B), alternated block by block on one lattice of one law (each block from the same
+/// histories, as BM_ForceAlternate): ratio below 1 where asking ahead pays. bytes: the
+/// lattice's records as the rule counts them (it asks from kPrefetchBytes on); prefetch_auto:
+/// what the rule chooses for this lattice.
+void BM_PrefetchAlternate(benchmark::State& st, ModelCase mc) {
+  std::unique_ptr<ForceLoop> L;
+  try {
+    L = std::make_unique<ForceLoop>(int(st.range(0)), mc);
+  } catch (const std::exception& e) {
+    st.SkipWithError(e.what());
+    return;
+  }
+  constexpr int kBlock = 4;  // calls per block, the first untimed
+  std::vector<double> ratio, ta, tb;
+  for (auto _ : st) {
+    double t[2] = {0, 0};
+    for (int on = 0; on < 2; ++on) {
+      set_force_loop_prefetch(on);
+      L->restore();
+      for (int c = 0; c < kBlock; ++c) {
+        const double dt = L->call();
+        if (c > 0) t[on] += dt;
+      }
+    }
+    ratio.push_back(t[1] / t[0]);
+    ta.push_back(t[0] / (kBlock - 1));
+    tb.push_back(t[1] / (kBlock - 1));
+  }
+  set_force_loop_prefetch(-1);
+  if (ratio.empty()) return;
+  ratio_counters(st, ratio, ta, tb);
+  const System& s = *L->s;
+  const size_t entries = s.nl.jdx.size(), n = s.particles.size(), state = s.model->state_size();
+  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
+  st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
+}
+
 
 /// A whole step (integration, rebuild check, forces) on the lattice.
 void BM_Step(benchmark::State& st, ModelCase mc) {
@@ -320,6 +368,46 @@ void BM_CaseStep(benchmark::State& st) {
   st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
   st.counters["contacts_per_particle"] = double(s->contact_count()) / double(s->particles.size());
   st.counters["entries_per_particle"] = double(s->nl.pair_count()) / double(s->particles.size());
+}
+
+/// The same on whole steps of the case benchmarks' case (bench_case(), by default the chute;
+/// one thread): blocks of kBlock steps with the prefetch off, then on, the run going on from
+/// block to block. ratio: the on-blocks' CPU time over the off-blocks', block pair by pair.
+void BM_CasePrefetch(benchmark::State& st) {
+  const std::string path = bench_case();
+  std::unique_ptr<System> s;
+  try {
+    const Case c = load_case_file(path, {"simulation.threads=1"});
+    s = build_system(c);
+    s->prepare();
+  } catch (const std::exception& e) {
+    st.SkipWithError((path + ": " + e.what()).c_str());
+    return;
+  }
+  constexpr int kBlock = 6;  // steps per block, the first untimed
+  std::vector<double> ratio, ta, tb;
+  for (auto _ : st) {
+    double t[2] = {0, 0};
+    for (int on = 0; on < 2; ++on) {
+      set_force_loop_prefetch(on);
+      for (int c = 0; c < kBlock; ++c) {
+        timespec t0, t1;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+        s->step_once(true);
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+        if (c > 0) t[on] += double(t1.tv_sec - t0.tv_sec) + 1e-9 * double(t1.tv_nsec - t0.tv_nsec);
+      }
+    }
+    ratio.push_back(t[1] / t[0]);
+    ta.push_back(t[0] / (kBlock - 1));
+    tb.push_back(t[1] / (kBlock - 1));
+  }
+  set_force_loop_prefetch(-1);
+  if (ratio.empty()) return;
+  ratio_counters(st, ratio, ta, tb);
+  const size_t entries = s->nl.jdx.size(), n = s->particles.size(), state = s->model->state_size();
+  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
+  st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
 }
 
 /// The neighbor build of a case in mid-run (bench_case(), as BM_CaseStep): the case is
@@ -448,7 +536,9 @@ void register_all() {
   }
   for (const auto& c : cases) {
     const std::string tag = tag_of(c);
-    iters(benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c))->Arg(32)->Unit(benchmark::kMicrosecond);
+    // 8: a lattice of 512 spheres, about the ring shear main job's 643, whose records stay in
+    // the core's caches (the force loop then asks for none ahead: force_loop_prefetches).
+    iters(benchmark::RegisterBenchmark(("BM_Force/" + tag).c_str(), BM_Force, c))->Arg(8)->Arg(32)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Step/" + tag).c_str(), BM_Step, c)->Arg(32)->Unit(benchmark::kMicrosecond);
   }
   // Issue 6's fourth target: MEPA n = 3/2 + EPSD against the plain linear law; each law
@@ -476,6 +566,12 @@ void register_all() {
                           ModelCase{"mepa", "none"}, ModelCase{"mepa", "epsd"}})
       iters(benchmark::RegisterBenchmark(("BM_LaneWidths/" + tag_of(c)).c_str(), BM_LaneWidths, c))
           ->Arg(32)->Unit(benchmark::kMillisecond);
+  // The force loop's prefetch off and on (force_loop_prefetches' threshold): the linear law
+  // and MEPA + EPSD on lattices of 512, 4096 and 32,768 spheres, and the chute's steps.
+  for (const auto& c : {ModelCase{"linear", "none"}, ModelCase{"mepa", "epsd"}})
+    iters(benchmark::RegisterBenchmark(("BM_PrefetchAlternate/" + tag_of(c)).c_str(), BM_PrefetchAlternate, c))
+        ->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);
+  iters(benchmark::RegisterBenchmark("BM_CasePrefetch", BM_CasePrefetch))->Unit(benchmark::kMillisecond);
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_CaseScreen", BM_CaseScreen)->Unit(benchmark::kMicrosecond);
   iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))

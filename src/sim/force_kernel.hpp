@@ -77,6 +77,9 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
   const bool simd = screen_avx2_enabled();
   const bool wide = simd && screen_avx512_enabled();  // the screening eight entries at a time
+  // The touching entries' records asked for ahead only where they are too many to stay in
+  // the core's caches (screen.hpp, force_loop_prefetches).
+  const bool pref = force_loop_prefetches(entries, size_t(n), sizeof(State));
   // Velocities written only by the closing half-kick (ForceContext::kick_h), positions only
   // by the fused opening of the next step (ForceContext::open_dt), after every pair of the
   // particle has been evaluated.
@@ -255,7 +258,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         prefetch_record<0>(omega + j);
       };
       constexpr uint32_t D = 8;
-      for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
+      if (pref)
+        for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
       // One contact's result into the sums: the force and torque on i into i's row sum, j's
       // share into its reverse sums or the per-pair buffer, in list order.
       // reset: the contact's history is reset here where it ended (the lanes leave that to
@@ -289,11 +293,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if constexpr (Lanes::kHave) {
         if (simd && lane_p != nullptr) {
           const LaneInput lin{jdx, v, omega, radius, mass, flag, species, lane_p, nmat, hs, dt, want_a};
-          for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
+          if (pref)
+            for (uint32_t h = D; h < std::min(nh, kLaneChunk); ++h) pf(h);
           LaneOut lo;
           for (uint32_t h0 = 0; h0 < nh; h0 += kLaneChunk) {
             const uint32_t cnt = std::min(kLaneChunk, nh - h0);
-            for (uint32_t h = h0 + kLaneChunk; h < std::min(nh, h0 + 2 * kLaneChunk); ++h) pf(h);
+            if (pref)
+              for (uint32_t h = h0 + kLaneChunk; h < std::min(nh, h0 + 2 * kLaneChunk); ++h) pf(h);
             if (wide)
               Lanes::eval8(lin, hits, h0, cnt, lo);
             else
@@ -311,7 +317,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       // so its 152-byte zero fill (a `rep stos`) is not repeated per contact.
       PairForce out;
       for (uint32_t h = 0; h < nh; ++h) {
-        if (h + D < nh) pf(h + D);
+        if (pref && h + D < nh) pf(h + D);
         const uint32_t k = hk[h], j = jdx[k], i = hrow[h];
         const double ri = radius[i], rj = radius[j];
         const double rsum = ri + rj;

@@ -204,4 +204,19 @@ bool avx2_available() { return false; }
 
 #endif
 
+namespace {
+int g_prefetch = -2;  // -2: the environment not read yet; -1: the size rule; 0, 1: forced
+}  // namespace
+
+bool force_loop_prefetches(const size_t entries, const size_t particles, const size_t state_bytes) {
+  if (g_prefetch == -2) {
+    const char* e = std::getenv("COHDEM_PREFETCH");
+    g_prefetch = e == nullptr ? -1 : std::strcmp(e, "0") == 0 ? 0 : std::strcmp(e, "1") == 0 ? 1 : -1;
+  }
+  if (g_prefetch >= 0) return g_prefetch == 1;
+  return entries * state_bytes + particles * 4 * sizeof(Vec3) >= kPrefetchBytes;
+}
+
+void set_force_loop_prefetch(const int mode) { g_prefetch = mode < 0 ? -1 : mode > 0 ? 1 : 0; }
+
 }  // namespace cohdem

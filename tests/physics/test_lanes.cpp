@@ -405,3 +405,36 @@ TEST(Lanes, MepaSettingsOutsideTheLanesRunTheScalarLaw) {
                        5e-6);
   EXPECT_TRUE(on_lanes<MepaEpsdLaw>(*s));
 }
+
+// The force loop asks for the touching entries' records ahead only from kPrefetchBytes of
+// them (force_loop_prefetches); the bed here is far below that, so the rule alone would test
+// one side. Forced on and off, on the scalar law and in lanes, on one and two threads: a
+// prefetch changes no value, and neither may the loops it sits in.
+TEST(Lanes, PrefetchOnAndOffRunTheSameBits) {
+  const bool was = screen_avx2_enabled();
+  Result r[2][2][2];  // [lanes][prefetch][threads - 1]
+  for (int lanes = 0; lanes < 2; ++lanes) {
+    if (lanes == 1 && !avx2_available()) continue;
+    for (int pf = 0; pf < 2; ++pf)
+      for (int nt = 1; nt <= 2; ++nt) {
+        set_screen_avx2(lanes == 1);
+        set_force_loop_prefetch(pf);
+        auto s = make_bed(Law::MepaEpsd, nt);
+        s->run(400);
+        r[lanes][pf][nt - 1] = state_of(*s);
+      }
+  }
+  set_force_loop_prefetch(-1);
+  set_screen_avx2(was);
+  omp_set_num_threads(1);
+  for (int lanes = 0; lanes < (avx2_available() ? 2 : 1); ++lanes)
+    for (int t = 0; t < 2; ++t) {
+      EXPECT_EQ(differing(r[lanes][0][t].x, r[lanes][1][t].x), 0u) << "lanes " << lanes << ", " << t + 1 << " threads";
+      EXPECT_EQ(differing(r[lanes][0][t].v, r[lanes][1][t].v), 0u) << "lanes " << lanes << ", " << t + 1 << " threads";
+      EXPECT_EQ(differing(r[lanes][0][t].w, r[lanes][1][t].w), 0u) << "lanes " << lanes << ", " << t + 1 << " threads";
+    }
+  // The rule's threshold: records of a 643-particle ring shear bed (about 0.2 MB) stay below
+  // it, those of the 32,000-sphere chute (5.7 MB with the linear law's 24-byte history) do not.
+  EXPECT_FALSE(force_loop_prefetches(1700, 643, 80));
+  EXPECT_TRUE(force_loop_prefetches(110972, 32000, 24));
+}
