@@ -36,7 +36,7 @@ REPO = os.path.dirname(HERE)
 def count(bench, model, iters, work):
     """(instructions per contact, calls of compute, contacts) for one BM_Force/<model>."""
     out = os.path.join(work, "callgrind." + re.sub(r"[^a-z0-9]+", "_", model) + ".out")
-    filt = "BM_Force/" + re.escape(model) + "/"
+    filt = "BM_Force/" + re.escape(model) + "/32(/|$)"  # the 32^3 lattice (BM_Force also runs 8^3; /iterations:N may follow)
     env = dict(os.environ, COHDEM_BENCH_ITERS=str(iters))
     r = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", bench,
                         f"--benchmark_filter={filt}", "--benchmark_format=json"],

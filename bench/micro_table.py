@@ -63,8 +63,13 @@ def main():
     def med(name):
         return statistics.median(t for t, _, _ in runs[name])
 
-    ref = {"BM_Force": next((n for n in order if n.startswith("BM_Force/linear/")), None),
-           "BM_Step": next((n for n in order if n.startswith("BM_Step/linear/")), None)}
+    def ref(n):
+        """The linear law's run of the same benchmark and size (BM_Force runs 8^3 and 32^3)."""
+        parts = n.split("/")
+        if parts[0] not in ("BM_Force", "BM_Step") or len(parts) < 3:
+            return None
+        r = "/".join([parts[0], "linear"] + parts[2:])
+        return r if r in runs else None
     print(f"\nmedian of {a.rounds} interleaved rounds (CPU time; real time for BM_CaseStep)")
     print("| benchmark | ms per iteration | particle-steps per second | vs linear | vs linear with the same rolling "
           "| counters |")
@@ -73,7 +78,7 @@ def main():
         m = med(n)
         rate = statistics.median(ips for _, ips, _ in runs[n])
         kind = n.split("/")[0]
-        vs = f"{m / med(ref[kind]):.2f}" if ref.get(kind) else ""
+        vs = f"{m / med(ref(n)):.2f}" if ref(n) else ""
         # Like for like: BM_Force/mepa+epsd/32 against BM_Force/linear+epsd/32, when both ran.
         parts = n.split("/")
         roll = parts[1].partition("+")[2] if len(parts) > 2 else ""
