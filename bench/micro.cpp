@@ -110,6 +110,13 @@ std::string tag_of(const ModelCase& m) {
          (std::string(m.rolling) == "epsd" && m.eta_r == 0 ? "0" : "");
 }
 
+/// This thread's CPU time, s.
+double thread_cpu_seconds() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
 /// One model's lattice (lists built once, histories loaded by a few real steps) and its
 /// force context, as in a run that records no contacts (one thread: no per-pair stores).
 struct ForceLoop {
@@ -148,11 +155,9 @@ struct ForceLoop {
   }
   /// One force call; returns its thread CPU time, s.
   double call() {
-    timespec t0, t1;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+    const double t0 = thread_cpu_seconds();
     compute();
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
-    return double(t1.tv_sec - t0.tv_sec) + 1e-9 * double(t1.tv_nsec - t0.tv_nsec);
+    return thread_cpu_seconds() - t0;
   }
 };
 
@@ -257,6 +262,35 @@ void BM_ForceAlternateSliding(benchmark::State& st, ModelCase a, ModelCase b) {
 /// alternated block by block: ratio is the eight lanes' time over the four lanes'.
 void BM_LaneWidths(benchmark::State& st, ModelCase mc) { BM_ForceAlternateIn(st, mc, mc, 0, true); }
 
+/// BM_PrefetchAlternate's and BM_CasePrefetch's loop: per iteration a block of `block` calls
+/// of `timed` (each returns its seconds; a block's first is not counted) with the prefetch
+/// off, then one with it on, `reset()` before each block; then the ratio counters, and the
+/// records of `s` as force_loop_prefetches counts them (`bytes`) with its choice.
+template <class Reset, class Timed>
+void prefetch_alternate(benchmark::State& st, const System& s, const int block, Reset&& reset, Timed&& timed) {
+  std::vector<double> ratio, ta, tb;
+  for (auto _ : st) {
+    double t[2] = {0, 0};
+    for (int on = 0; on < 2; ++on) {
+      set_force_loop_prefetch(on);
+      reset();
+      for (int c = 0; c < block; ++c) {
+        const double dt = timed();
+        if (c > 0) t[on] += dt;
+      }
+    }
+    ratio.push_back(t[1] / t[0]);
+    ta.push_back(t[0] / (block - 1));
+    tb.push_back(t[1] / (block - 1));
+  }
+  set_force_loop_prefetch(-1);
+  if (ratio.empty()) return;
+  ratio_counters(st, ratio, ta, tb);
+  const size_t entries = s.nl.jdx.size(), n = s.particles.size(), state = s.model->state_size();
+  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
+  st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
+}
+
 /// The force loop's prefetch of the touching entries' records (force_loop_prefetches) off (A)
 /// and on (B), alternated block by block on one lattice of one law (each block from the same
 /// histories, as BM_ForceAlternate): ratio below 1 where asking ahead pays. bytes: the
@@ -270,31 +304,8 @@ void BM_PrefetchAlternate(benchmark::State& st, ModelCase mc) {
     st.SkipWithError(e.what());
     return;
   }
-  constexpr int kBlock = 4;  // calls per block, the first untimed
-  std::vector<double> ratio, ta, tb;
-  for (auto _ : st) {
-    double t[2] = {0, 0};
-    for (int on = 0; on < 2; ++on) {
-      set_force_loop_prefetch(on);
-      L->restore();
-      for (int c = 0; c < kBlock; ++c) {
-        const double dt = L->call();
-        if (c > 0) t[on] += dt;
-      }
-    }
-    ratio.push_back(t[1] / t[0]);
-    ta.push_back(t[0] / (kBlock - 1));
-    tb.push_back(t[1] / (kBlock - 1));
-  }
-  set_force_loop_prefetch(-1);
-  if (ratio.empty()) return;
-  ratio_counters(st, ratio, ta, tb);
-  const System& s = *L->s;
-  const size_t entries = s.nl.jdx.size(), n = s.particles.size(), state = s.model->state_size();
-  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
-  st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
+  prefetch_alternate(st, *L->s, 4, [&] { L->restore(); }, [&] { return L->call(); });
 }
-
 
 /// A whole step (integration, rebuild check, forces) on the lattice.
 void BM_Step(benchmark::State& st, ModelCase mc) {
@@ -384,30 +395,11 @@ void BM_CasePrefetch(benchmark::State& st) {
     st.SkipWithError((path + ": " + e.what()).c_str());
     return;
   }
-  constexpr int kBlock = 6;  // steps per block, the first untimed
-  std::vector<double> ratio, ta, tb;
-  for (auto _ : st) {
-    double t[2] = {0, 0};
-    for (int on = 0; on < 2; ++on) {
-      set_force_loop_prefetch(on);
-      for (int c = 0; c < kBlock; ++c) {
-        timespec t0, t1;
-        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
-        s->step_once(true);
-        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
-        if (c > 0) t[on] += double(t1.tv_sec - t0.tv_sec) + 1e-9 * double(t1.tv_nsec - t0.tv_nsec);
-      }
-    }
-    ratio.push_back(t[1] / t[0]);
-    ta.push_back(t[0] / (kBlock - 1));
-    tb.push_back(t[1] / (kBlock - 1));
-  }
-  set_force_loop_prefetch(-1);
-  if (ratio.empty()) return;
-  ratio_counters(st, ratio, ta, tb);
-  const size_t entries = s->nl.jdx.size(), n = s->particles.size(), state = s->model->state_size();
-  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
-  st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
+  prefetch_alternate(st, *s, 6, [] {}, [&] {
+    const double t0 = thread_cpu_seconds();
+    s->step_once(true);  // as BM_CaseStep
+    return thread_cpu_seconds() - t0;
+  });
 }
 
 /// The neighbor build of a case in mid-run (bench_case(), as BM_CaseStep): the case is
