@@ -161,15 +161,21 @@ struct ForceLoop {
   }
 };
 
-/// The bulk force loop (both passes) of one contact model, lists built once.
-void BM_Force(benchmark::State& st, ModelCase mc) {
-  std::unique_ptr<ForceLoop> L;
+/// The benchmark's lattice (Arg: spheres per side) of mc, or null with the benchmark skipped
+/// and the reason given.
+std::unique_ptr<ForceLoop> force_loop(benchmark::State& st, const ModelCase mc) {
   try {
-    L = std::make_unique<ForceLoop>(int(st.range(0)), mc);
+    return std::make_unique<ForceLoop>(int(st.range(0)), mc);
   } catch (const std::exception& e) {
     st.SkipWithError(e.what());
-    return;
+    return nullptr;
   }
+}
+
+/// The bulk force loop (both passes) of one contact model, lists built once.
+void BM_Force(benchmark::State& st, ModelCase mc) {
+  const std::unique_ptr<ForceLoop> L = force_loop(st, mc);
+  if (!L) return;
   for (auto _ : st) L->compute();
   const System& s = *L->s;
   st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s.particles.size()));
@@ -297,13 +303,8 @@ void prefetch_alternate(benchmark::State& st, const System& s, const int block, 
 /// lattice's records as the rule counts them (it asks from kPrefetchBytes on); prefetch_auto:
 /// what the rule chooses for this lattice.
 void BM_PrefetchAlternate(benchmark::State& st, ModelCase mc) {
-  std::unique_ptr<ForceLoop> L;
-  try {
-    L = std::make_unique<ForceLoop>(int(st.range(0)), mc);
-  } catch (const std::exception& e) {
-    st.SkipWithError(e.what());
-    return;
-  }
+  const std::unique_ptr<ForceLoop> L = force_loop(st, mc);
+  if (!L) return;
   prefetch_alternate(st, *L->s, 4, [&] { L->restore(); }, [&] { return L->call(); });
 }
 
