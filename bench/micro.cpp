@@ -293,7 +293,7 @@ void prefetch_alternate(benchmark::State& st, const System& s, const int block, 
   if (ratio.empty()) return;
   ratio_counters(st, ratio, ta, tb);
   const size_t entries = s.nl.jdx.size(), n = s.particles.size(), state = s.model->state_size();
-  st.counters["bytes"] = double(entries * state + n * 4 * sizeof(Vec3));
+  st.counters["bytes"] = double(force_loop_record_bytes(entries, n, state));
   st.counters["prefetch_auto"] = force_loop_prefetches(entries, n, state) ? 1.0 : 0.0;
 }
 

@@ -149,15 +149,20 @@ bool screen_avx512_enabled();
 /// The screening's name for logs and summary.json: "avx512", "avx2" or "scalar".
 const char* screen_simd_name();
 
-/// Whether the force loop asks for the records its touching entries reach (the history by
-/// entry; the partner's reverse sums, velocity and spin) a few contacts ahead of their use.
-/// That pays where the records come from beyond the core's own caches and costs where they
-/// do not (the addresses' loads and arithmetic, about 20 instructions a contact): about 6 %
-/// of the 643-particle ring shear main job, and 3-9 % gained on the 32,000-sphere chutes
-/// (docs/performance-history.md, fifty-fourth round). So it asks from kPrefetchBytes of such
-/// records on: `entries` list entries of `state_bytes` each and, per particle, a PairResult,
-/// a velocity and a spin (four Vec3s). COHDEM_PREFETCH=0 or 1 in the environment turns it
-/// off or on at any size (read once; for comparisons); the results are the same bits.
+/// The records the force loop's touching entries reach: `entries` list entries' histories of
+/// `state_bytes` each and, per particle, its reverse sums (a PairResult), velocity and spin,
+/// four Vec3s in all.
+inline size_t force_loop_record_bytes(const size_t entries, const size_t particles, const size_t state_bytes) {
+  return entries * state_bytes + particles * 4 * sizeof(Vec3);
+}
+/// Whether the force loop asks for those records a few contacts ahead of their use. That
+/// pays where they come from beyond the core's own caches and costs where they do not (the
+/// addresses' loads and arithmetic, about 20 instructions a contact): 6-9 % of the force loop
+/// on beds of 512-4096 spheres such as the ring shear main job's, and 3-21 % gained on the
+/// 32,000-sphere chutes (docs/performance-history.md, fifty-fourth round). So it asks from
+/// kPrefetchBytes of them on (force_loop_record_bytes). COHDEM_PREFETCH=0 or 1 in the
+/// environment turns it off or on at any size (read once; for comparisons); the results are
+/// the same bits.
 inline constexpr size_t kPrefetchBytes = size_t(2) << 20;
 bool force_loop_prefetches(size_t entries, size_t particles, size_t state_bytes);
 /// Tests: -1 the rule above, 0 never, 1 always (overrides the environment).

@@ -214,7 +214,7 @@ bool force_loop_prefetches(const size_t entries, const size_t particles, const s
     g_prefetch = e == nullptr ? -1 : std::strcmp(e, "0") == 0 ? 0 : std::strcmp(e, "1") == 0 ? 1 : -1;
   }
   if (g_prefetch >= 0) return g_prefetch == 1;
-  return entries * state_bytes + particles * 4 * sizeof(Vec3) >= kPrefetchBytes;
+  return force_loop_record_bytes(entries, particles, state_bytes) >= kPrefetchBytes;
 }
 
 void set_force_loop_prefetch(const int mode) { g_prefetch = mode < 0 ? -1 : mode > 0 ? 1 : 0; }
