@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   contact->add_option("--case", cc.case_path, "take model, parameters and materials from a case file");
   contact->add_option("--materials", materials, "material pair in that case, e.g. ore,steel (default: the first twice)");
   contact->add_option("--model", cc.model, "contact model (without --case)");
-  contact->add_option("--rolling", cc.rolling, "rolling model (without --case): none, epsd, cdt");
+  contact->add_option("--rolling", cc.rolling, "rolling model (without --case): none, epsd, cdt, sds");
   contact->add_option("--set", cc.params, "model parameter, e.g. --set k1=4.75e8")->take_all();
   contact->add_option("--ri", cc.ri, "radius of body i, m")->required();
   contact->add_option("--rj", cc.rj, "radius of body j, m (default: ri)");

@@ -13,6 +13,7 @@
 #include "models/normal/linear.hpp"
 #include "models/normal/mepa.hpp"
 #include "models/normal/walton.hpp"
+#include "models/registry_sds.hpp"
 #include "models/rolling/rolling.hpp"
 #include "models/tangential/spring.hpp"
 #include "models/twisting/twisting.hpp"
@@ -42,6 +43,7 @@ Factory with_rolling(const std::string& name) {
     if (rolling == "none") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, NoRolling, W>>>(name);
     if (rolling == "epsd") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, EpsdRolling, W>>>(name);
     if (rolling == "cdt") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, CdtRolling, W>>>(name);
+    if (rolling == "sds") return make_sds_law<N, D, T, W>(name);  // compiled in registry_sds.cpp
     return nullptr;
   };
 }
@@ -78,7 +80,7 @@ std::vector<std::string> contact_model_names() {
   return v;
 }
 
-std::vector<std::string> rolling_model_names() { return {"none", "epsd", "cdt"}; }
+std::vector<std::string> rolling_model_names() { return {"none", "epsd", "cdt", "sds"}; }
 
 std::unique_ptr<ContactModel> make_contact_model(const std::string& model, const std::string& rolling,
                                                  const std::string& file, int line) {

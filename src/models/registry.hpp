@@ -1,5 +1,5 @@
 // The contact-model registry: a preset name ("linear", "hertz_mindlin", "mepa", ...) and a
-// rolling choice ("none", "epsd", "cdt") select one compiled ContactLaw. The choice is made
+// rolling choice ("none", "epsd", "cdt", "sds") select one compiled ContactLaw. The choice is made
 // once per run, never per pair. To add a model: write its sub-model header(s), then add one
 // row to the table in registry.cpp.
 #pragma once

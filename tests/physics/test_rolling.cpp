@@ -40,6 +40,11 @@ namespace {
 // its missing moment in that time (~2/3 of the limit over t_b, partly offset by the viscous
 // term eta_r C w_r which acts while the spring is below its limit) shifts t1 by ~1e-3.
 constexpr double kR = 0.01, kRho = 2500, kKn = 1e7, kG = 9.81;
+// SDS: the force stiffness of EPSD's spring above seen at the contact point (k_r / R^2 =
+// 2.25 kn mu_r^2 = 2.25e5 N/m for mu_r = 0.1), the same build-up; the dashpot about a third
+// of critical for the rolling mode (effective mass (I + m R^2)/R^2 = 1.4 m: 2 sqrt(1.4 m
+// k) = 115 kg/s).
+constexpr double kSdsK = 2.25e5, kSdsGamma = 35;
 
 /// Sphere resting on the plane z = 0 at its equilibrium overlap under gravity g_z (no bounce).
 std::unique_ptr<System> sphere_on_plane(const std::string& rolling, double mu, double mu_r, Vec3 gravity,
@@ -47,6 +52,10 @@ std::unique_ptr<System> sphere_on_plane(const std::string& rolling, double mu, d
   ParamSet p = params({{"kn", kKn}, {"e", 0.5}, {"mu", mu}, {"damp_t", 1.0}});
   if (rolling != "none") p.set("mu_r", mu_r);
   if (rolling == "epsd") p.set("eta_r", 0.3);
+  if (rolling == "sds") {
+    p.set("k_r", kSdsK);
+    p.set("gamma_r", kSdsGamma);
+  }
   auto s = make_system({{"glass", kRho, 0, 0}}, "linear", rolling, p, dt, gravity);
   s->cfg.sort_every = 0;
   s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
@@ -63,7 +72,7 @@ TEST(Rolling, SlideThenRollThenStop) {
   const double dt = tc / 20;  // resting contact: 20 steps per period resolve it well
   const double v0 = 0.2, mu = 0.3;
   struct Case { const char* rolling; double mu_r; };
-  for (const Case c : {Case{"none", 0.0}, Case{"epsd", 0.1}, Case{"cdt", 0.1}}) {
+  for (const Case c : {Case{"none", 0.0}, Case{"epsd", 0.1}, Case{"cdt", 0.1}, Case{"sds", 0.1}}) {
     auto s = sphere_on_plane(c.rolling, mu, c.mu_r, {0, 0, -kG}, dt);
     s->particles.v[0] = {v0, 0, 0};
     s->prepare();
@@ -186,6 +195,50 @@ TEST(Rolling, EpsdInclineHoldsBelowAtanMuR) {
       const double tol = 1e-3 * a_ref;
       EXPECT_NEAR(a, a_ref, tol) << tag;
       report(("incline EPSD rolling acceleration (m/s^2) " + tag).c_str(), a, a_ref, 1e-3, "rel");
+    }
+  }
+}
+
+// SDS (LAMMPS's `rolling sds`) on an incline, as EPSD above: the moment's limit is the same,
+// mu_r R* F_c (R* = R on a wall), so the sphere holds below atan(mu_r) and rolls above at
+// 5/7 g (sin - mu_r cos). Held, the spring carries the rolling force f = M/R = F (M = F R, the
+// moment of gravity about the contact point) on its displacement xi = F/k_r, which for a
+// sphere rolling on a plane is the distance its centre rolled: x = F/k_t + F/k_r.
+TEST(Rolling, SdsInclineHoldsBelowAtanMuR) {
+  const double m = sphere_mass(kRho, kR);
+  const double tc = M_PI * std::sqrt(m / kKn), dt = tc / 20;
+  const double mu = 1.0, mu_r = 0.1, crit = std::atan(mu_r);
+  for (double frac : {0.5, 0.95, 1.05, 1.5}) {
+    const double alpha = frac * crit;
+    auto s = sphere_on_plane("sds", mu, mu_r, {0, 0, -kG}, dt);
+    s->prepare();
+    const double t_ramp = 0.05;
+    auto tilt = [&](double t) {
+      const double a = alpha * std::min(1.0, t / t_ramp);
+      s->cfg.gravity = {kG * std::sin(a), 0, -kG * std::cos(a)};
+    };
+    while (s->time < t_ramp) { s->step_once(); tilt(s->time); }
+    auto& P = s->particles;
+    const std::string tag = "alpha/atan(mu_r)=" + std::to_string(frac).substr(0, 4);
+    if (frac < 1) {
+      s->run(uint64_t(0.1 / dt));
+      // Tolerance 1e-3 relative: the lever arm R - delta (delta/R = 1e-6), and the ringing
+      // after the ramp damped (damp_t = 1, gamma_r a third of critical) within 0.1 s.
+      const double F = m * kG * std::sin(alpha), kt = 2.0 / 7.0 * kKn;
+      const double x_ref = F / kt + F / kSdsK;
+      EXPECT_NEAR(P.x[0].x / x_ref, 1.0, 1e-3) << tag;
+      EXPECT_LT(std::fabs(P.v[0].x), 1e-12) << tag;
+      report(("incline SDS held: static displacement (m) " + tag).c_str(), P.x[0].x, x_ref, 1e-3, "rel");
+    } else {
+      s->run(uint64_t(0.05 / dt));
+      const double va = P.v[0].x, ta = s->time;
+      s->run(uint64_t(0.1 / dt));
+      const double a = (P.v[0].x - va) / (s->time - ta);
+      const double a_ref = 5.0 / 7.0 * kG * (std::sin(alpha) - mu_r * std::cos(alpha));
+      // At the limit the rolling force is mu_r F_c along the spring's direction; the dashpot
+      // is inside the limit (the spring is reset to give it): tolerance 1e-3 relative.
+      EXPECT_NEAR(a, a_ref, 1e-3 * a_ref) << tag;
+      report(("incline SDS rolling acceleration (m/s^2) " + tag).c_str(), a, a_ref, 1e-3, "rel");
     }
   }
 }

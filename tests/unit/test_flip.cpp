@@ -48,11 +48,15 @@ std::vector<Case> cases() {
   };
   std::vector<Case> v;
   for (auto& [m, ps] : base)
-    for (const char* r : {"none", "epsd", "cdt"}) {
+    for (const char* r : {"none", "epsd", "cdt", "sds"}) {
       if (m == "walton" && std::string(r) != "none") continue;
       ParamSet p = ps;
       if (std::string(r) != "none") p.set("mu_r", 0.1);
       if (std::string(r) == "epsd") p.set("eta_r", 0.3);
+      if (std::string(r) == "sds") {
+        p.set("k_r", 1e4);
+        p.set("gamma_r", 0.01);
+      }
       v.push_back({m, r, p});
     }
   return v;

@@ -9,6 +9,14 @@
 //   1/(I_j + m_j r_j^2)) (Eqs. 17-18), switched off while the spring is at its limit.
 // CdtRolling: constant directional torque M = -mu_r R* F_c w_r/|w_r| (Zhou et al. 1999;
 //   Ai et al. 2011 model A). It chatters at rest; prefer EPSD for static packings.
+// SdsRolling: spring-dashpot-slider on the rolling displacement (Luding 2008, Granular
+//   Matter 10, 235; the rolling velocity of Wang et al. 2015, Particuology 23, 49, Eq. 31;
+//   LAMMPS pair granular's `rolling sds k_r gamma_r mu_r`): v_r = R* (w_rel x n), a spring
+//   of stiffness k_r (N/m) on the displacement xi (xi += v_r dt, kept in the tangent plane)
+//   and a dashpot gamma_r (kg/s): f_r = -k_r xi - gamma_r v_r, limited to |f_r| <= mu_r F_c,
+//   where the spring is set so that spring and dashpot give the limit (xi = -(f_r +
+//   gamma_r v_r)/k_r); moment on i M = R* n x f_r, so |M| <= mu_r R* F_c as with EPSD. Its
+//   stiffness is a constant, not tied to the normal law's.
 #pragma once
 #include <array>
 #include <cmath>
@@ -76,6 +84,38 @@ struct CdtRolling {
     const double w = norm(wr);
     if (w <= 0) return {};
     return wr * (-p.mu_r * g.rstar * fc / w);
+  }
+};
+
+struct SdsRolling {
+  struct Params { double k_r, gamma_r, mu_r; };
+  /// The spring's force -k_r xi, kept instead of xi (the same values: k_r is a constant).
+  struct State { Vec3 fk; };
+  /// v_r = R* (w_rel x n) is the same seen from j (both w_rel and n change sign), and so are
+  /// xi and the spring; only the moment R* n x f_r changes sign, and ContactLaw gives j the
+  /// opposite of i's.
+  static void flip(State&) {}
+  static constexpr std::array specs = {
+      req("k_r", "N/m", 0, kInf, "rolling spring stiffness, on the rolling displacement (SDS)"),
+      opt("gamma_r", "kg/s", 0.0, 0, kInf, "rolling dashpot coefficient (SDS)"),
+      req("mu_r", "-", 0, kInf, "rolling friction coefficient")};
+  static Params make(const ParamSet& p, const PairMaterial&) {
+    return {p.get(specs[0]), p.get(specs[1]), p.get(specs[2])};
+  }
+  COHDEM_INLINE static Vec3 apply(const Params& p, const PairGeom& g, const NormalOut&, double fc, State& s) {
+    const Vec3 vr = cross(g.wrel, g.n) * g.rstar;
+    rotate_into_plane(s.fk, g.n);
+    s.fk -= vr * (p.k_r * g.dt);
+    const Vec3 damp = vr * p.gamma_r;
+    Vec3 f = s.fk - damp;
+    const double lim = p.mu_r * fc;
+    const double f2 = norm2(f);
+    // Sliding, f is scaled to the limit and the spring becomes what gives it with the dashpot;
+    // sticking, f is multiplied by exactly 1 (limit_scale).
+    const bool slide = f2 > lim * lim;
+    f *= limit_scale(f2, lim);
+    s.fk = select(slide, f + damp, s.fk);
+    return cross(g.n, f) * g.rstar;
   }
 };
 
