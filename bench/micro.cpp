@@ -68,6 +68,10 @@ ParamSet params_for(const std::string& model, const std::string& rolling, const 
   }
   if (rolling != "none") p.set("mu_r", 0.1);
   if (rolling == "epsd") p.set("eta_r", eta_r);
+  if (rolling == "sds") {  // the chute's LAMMPS port (bench/chute_hmr.toml)
+    p.set("k_r", 5e4);
+    p.set("gamma_r", 25.0);
+  }
   return p;
 }
 
@@ -514,7 +518,7 @@ benchmark::internal::Benchmark* iters(benchmark::internal::Benchmark* b) {
 
 void register_all() {
   std::vector<ModelCase> cases = {{"linear", "none"}, {"linear", "epsd"}, {"hertz_mindlin", "none"},
-                                  {"hertz_mindlin", "epsd"}};
+                                  {"hertz_mindlin", "epsd"}, {"hertz_mindlin", "sds"}};
   // Presets that land later (MEPA, Walton, ...) are picked up from the registry.
   static std::vector<std::string> extra;
   for (const auto& name : contact_model_names())

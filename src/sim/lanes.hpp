@@ -3,8 +3,8 @@
 // for the linear law (LAMMPS's chute, the poured packing), Hertz-Mindlin (the chute's
 // `granular hmr` variant, the packed beds) and MEPA (the ring shear tester's law; where every
 // material pair has fixed stiffnesses, n = 1 or 3/2 and no dp_shift: lane_usable, other MEPA
-// settings run the scalar law), each with rolling resistance `none` or `epsd` and no
-// twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
+// settings run the scalar law), each with rolling resistance `none` or `epsd` (Hertz-Mindlin
+// also `sds`, the rolling law of the chute's LAMMPS port) and no twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
 // the touching ones are then evaluated here in groups of four (eight), and the loop adds their
 // results to the particles' sums one contact at a time, in list order.
 //
@@ -43,6 +43,7 @@ using LinearLaw = LinearLawR<NoRolling>;
 using LinearEpsdLaw = LinearLawR<EpsdRolling>;
 using HertzLaw = HertzLawR<NoRolling>;
 using HertzEpsdLaw = HertzLawR<EpsdRolling>;
+using HertzSdsLaw = HertzLawR<SdsRolling>;
 using MepaLaw = MepaLawR<NoRolling>;
 using MepaEpsdLaw = MepaLawR<EpsdRolling>;
 
@@ -75,9 +76,11 @@ struct HertzLaneParams {
   double mu_r;
   double two_eta_r;    ///< eta_r * 2.0 (exact)
   uint64_t damped;     ///< mask: eta_r > 0
+  double k_r, gamma_r;  ///< SDS's spring and dashpot (0 with EPSD or without rolling)
 };
 HertzLaneParams lane_params(const HertzLaw::Params& p);
 HertzLaneParams lane_params(const HertzEpsdLaw::Params& p);
+HertzLaneParams lane_params(const HertzSdsLaw::Params& p);
 
 /// The same for MEPA.
 struct MepaLaneParams {
@@ -125,6 +128,7 @@ struct LinearLaneHistory { Vec3 fs; };
 struct LinearEpsdLaneHistory { Vec3 fs; Vec3 mk; };
 struct HertzLaneHistory { Vec3 fs; double kt_prev; };
 struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
+struct HertzSdsLaneHistory { Vec3 fs; double kt_prev; Vec3 fk; };  ///< fk: SDS's spring force
 struct MepaLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; };
 struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
 
@@ -164,12 +168,13 @@ struct LaneOut {
 using LaneEval = void (*)(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 /// The entry points, one list for both widths: X(law, suffix, rolling, width) for each law
 /// with lanes, naming law##suffix##_lanes_##width (linear_lanes_avx2, mepa_epsd_lanes_avx512,
-/// ...); lanes_body.hpp defines them from the law's group (law##_group) with EPSD rolling or
-/// without. The eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit
-/// for bit): call them only when screen_avx512_enabled().
+/// ...); lanes_body.hpp defines them from the law's group (law##_group) with EPSD rolling
+/// (rolling = true), without (false), or with SDS rolling (2; Hertz-Mindlin only). The
+/// eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit for bit): call
+/// them only when screen_avx512_enabled().
 #define COHDEM_LANE_ENTRIES(X, width)                                                          \
   X(linear, , false, width) X(linear, _epsd, true, width) X(hertz, , false, width)              \
-  X(hertz, _epsd, true, width) X(mepa, , false, width) X(mepa, _epsd, true, width)
+  X(hertz, _epsd, true, width) X(hertz, _sds, 2, width) X(mepa, , false, width) X(mepa, _epsd, true, width)
 #define COHDEM_LANE_DECLARE(law, suffix, rolling, width) \
   void law##suffix##_lanes_##width(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 /// Where the build is not for x86-64: entries that are never called (screen_avx2_enabled()
@@ -203,6 +208,8 @@ struct LaneLaw<HertzLaw> : LaneLawOf<HertzLaw, HertzLaneParams, hertz_lanes_avx2
 template <>
 struct LaneLaw<HertzEpsdLaw> : LaneLawOf<HertzEpsdLaw, HertzLaneParams, hertz_epsd_lanes_avx2, hertz_epsd_lanes_avx512> {};
 template <>
+struct LaneLaw<HertzSdsLaw> : LaneLawOf<HertzSdsLaw, HertzLaneParams, hertz_sds_lanes_avx2, hertz_sds_lanes_avx512> {};
+template <>
 struct LaneLaw<MepaLaw> : LaneLawOf<MepaLaw, MepaLaneParams, mepa_lanes_avx2, mepa_lanes_avx512> {
   static bool usable(const MepaLaw::Params& p) { return lane_usable(p); }
 };
@@ -218,13 +225,15 @@ template <class LH, class Law>
 constexpr bool same_layout() {
   using S = typename Law::State;
   constexpr bool kt = requires(S x) { x.tangential.kt_prev; }, mk = requires(S x) { x.rolling.mk; },
-                 mepa = requires(S x) { x.normal.Dmax; };
-  if (kt != requires(LH h) { h.kt_prev; } || mk != requires(LH h) { h.mk; } || mepa != requires(LH h) { h.Dmax; })
+                 fk = requires(S x) { x.rolling.fk; }, mepa = requires(S x) { x.normal.Dmax; };
+  if (kt != requires(LH h) { h.kt_prev; } || mk != requires(LH h) { h.mk; } || fk != requires(LH h) { h.fk; } ||
+      mepa != requires(LH h) { h.Dmax; })
     return false;
   S s{};
   s.tangential.fs = {1, 2, 3};
   if constexpr (kt) s.tangential.kt_prev = 4;
   if constexpr (mk) s.rolling.mk = {5, 6, 7};
+  if constexpr (fk) s.rolling.fk = {5, 6, 7};
   if constexpr (mepa) {
     s.normal.Dmax = 8;
     s.normal.Dp = 9;
@@ -234,11 +243,13 @@ constexpr bool same_layout() {
   bool ok = h.fs == Vec3{1, 2, 3};
   if constexpr (kt) ok = ok && h.kt_prev == 4;
   if constexpr (mk) ok = ok && h.mk == Vec3{5, 6, 7};
+  if constexpr (fk) ok = ok && h.fk == Vec3{5, 6, 7};
   if constexpr (mepa) ok = ok && h.Dmax == 8 && h.Dp == 9 && h.branch == 2;
   return ok;
 }
 static_assert(same_layout<LinearLaneHistory, LinearLaw>() && same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>() &&
                   same_layout<HertzLaneHistory, HertzLaw>() && same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>() &&
+                  same_layout<HertzSdsLaneHistory, HertzSdsLaw>() &&
                   same_layout<MepaLaneHistory, MepaLaw>() && same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(),
               "the lanes' histories must be the laws' State, byte for byte");
 

@@ -24,10 +24,18 @@ namespace {
 
 constexpr uint64_t mask_of(const bool on) { return on ? ~uint64_t(0) : 0; }
 
-/// EPSD's fields of the lane parameters (0 without rolling resistance).
+/// The rolling fields of the lane parameters: EPSD's, or SDS's (Hertz-Mindlin's only), 0
+/// where the law has none.
 template <class Q, class R>
 void rolling_params(Q& q, const R& r) {
-  if constexpr (requires { r.mu_r; }) {
+  if constexpr (requires { q.k_r; }) q.k_r = q.gamma_r = 0;
+  if constexpr (requires { r.k_r; }) {
+    q.mu_r = r.mu_r;
+    q.k_r = r.k_r;
+    q.gamma_r = r.gamma_r;
+    q.two_eta_r = 0;
+    q.damped = 0;
+  } else if constexpr (requires { r.mu_r; }) {
     q.mu_r = r.mu_r;
     q.two_eta_r = r.eta_r * 2.0;
     q.damped = mask_of(r.eta_r > 0);
@@ -103,6 +111,7 @@ LinearLaneParams lane_params(const LinearLaw::Params& p) { return linear_params(
 LinearLaneParams lane_params(const LinearEpsdLaw::Params& p) { return linear_params(p); }
 HertzLaneParams lane_params(const HertzLaw::Params& p) { return hertz_params(p); }
 HertzLaneParams lane_params(const HertzEpsdLaw::Params& p) { return hertz_params(p); }
+HertzLaneParams lane_params(const HertzSdsLaw::Params& p) { return hertz_params(p); }
 MepaLaneParams lane_params(const MepaLaw::Params& p) { return mepa_params(p); }
 MepaLaneParams lane_params(const MepaEpsdLaw::Params& p) { return mepa_params(p); }
 bool lane_usable(const MepaLaw::Params& p) { return mepa_usable(p); }

@@ -257,6 +257,18 @@ LANES_FN L3 epsd4(const Group& G, L3& mk, const EpsdCoef& c, const V fc, const V
   return sel3(damped & ~slide, damped_m, mk);
 }
 
+/// SdsRolling::apply in lanes: fk is the spring's force, already turned into the new tangent
+/// plane (the caller's rotate_into_plane4); returns the moment on i.
+LANES_FN L3 sds4(const Group& G, L3& fk, const V fc, const V k_r, const V gamma_r, const V mu_r, const V dt) {
+  const L3 vr = cross3(G.wi - G.wj, G.n) * G.rstar;
+  fk = fk - vr * (k_r * dt);
+  const L3 damp = vr * gamma_r;
+  L3 f = fk - damp;
+  const M slide = limit4(f, mu_r * fc);
+  fk = sel3(slide, f + damp, fk);
+  return cross3(G.n, f) * G.rstar;
+}
+
 /// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
 LANES_FN void put(const Group& G, const uint32_t g, const M alive, const V fn, const L3& ft, const L3* mr, const V a,
                   LaneOut& out) {
@@ -323,6 +335,8 @@ static_assert(sizeof(HertzLaneHistory) == 32 && offsetof(HertzLaneHistory, fs) =
               offsetof(HertzLaneHistory, kt_prev) == 24);
 static_assert(sizeof(HertzEpsdLaneHistory) == 56 && offsetof(HertzEpsdLaneHistory, fs) == 0 &&
               offsetof(HertzEpsdLaneHistory, kt_prev) == 24 && offsetof(HertzEpsdLaneHistory, mk) == 32);
+static_assert(sizeof(HertzSdsLaneHistory) == 56 && offsetof(HertzSdsLaneHistory, fs) == 0 &&
+              offsetof(HertzSdsLaneHistory, kt_prev) == 24 && offsetof(HertzSdsLaneHistory, fk) == 32);
 static_assert(sizeof(MepaLaneHistory) == 56 && offsetof(MepaLaneHistory, Dp) == 8 &&
               offsetof(MepaLaneHistory, branch) == 16 && offsetof(MepaLaneHistory, fs) == 24 &&
               offsetof(MepaLaneHistory, kt_prev) == 48);
@@ -386,11 +400,13 @@ LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g
 }
 
 /// One group of contacts of Hertz-Mindlin (after their geometry); kU: one material pair;
-/// kRoll: with EPSD rolling resistance.
-template <bool kU, bool kRoll>
+/// kRoll: with EPSD rolling resistance (1), with SDS (2; its spring force where EPSD keeps its
+/// moment, in the same record layout), or without (0).
+template <bool kU, int kRoll>
 LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
-  using LH = std::conditional_t<kRoll, HertzEpsdLaneHistory, HertzLaneHistory>;
+  constexpr bool kEpsd = kRoll == 1, kSds = kRoll == 2;
+  using LH = std::conditional_t<kSds, HertzSdsLaneHistory, std::conditional_t<kEpsd, HertzEpsdLaneHistory, HertzLaneHistory>>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = HertzLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -402,7 +418,7 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   V kt_prev = h0.v[3];
   rotate_into_plane4(fs, G.n);
   L3 mk{};
-  if constexpr (kRoll) {
+  if constexpr (kRoll != 0) {
     const Cols h1 = load_quads(H, G.k, 3);
     mk = L3{h1.v[1], h1.v[2], h1.v[3]};
     rotate_into_plane4(mk, G.n);
@@ -412,7 +428,7 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   const V a = sqrtv(G.rstar * G.delta);
   const V kn = par(&LP::two_Estar) * a;
   EpsdCoef ec{};
-  if constexpr (kRoll) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
+  if constexpr (kEpsd) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
   const V f_el = (2.0 / 3.0) * kn * G.delta;
   V gamma;
   const V fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
@@ -422,10 +438,11 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   const L3 ft = spring_prev4(fs, kt_prev, G.vt, kt, dt, par(&LP::damp_kt) * gamma, par(&LP::mu), fc);
   // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
-  if constexpr (kRoll) {
-    const L3 mr = epsd4(G, mk, ec, fc, par(&LP::mu_r), par(&LP::damped), dt);
+  if constexpr (kRoll != 0) {
+    const L3 mr = kSds ? sds4(G, mk, fc, par(&LP::k_r), par(&LP::gamma_r), par(&LP::mu_r), dt)
+                       : epsd4(G, mk, ec, fc, par(&LP::mu_r), par(&LP::damped), dt);
     put(G, g, alive, fn, ft, &mr, a, out);
-    // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
+    // {kt_prev, mk} (SDS: fk) at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
   } else {
     put(G, g, alive, fn, ft, nullptr, a, out);

@@ -29,9 +29,12 @@ namespace {
 
 constexpr double kL = 0.03;  // periodic cell in x and y, m
 
-enum class Law { Linear, LinearEpsd, Hertz, HertzEpsd, Mepa, MepaEpsd };
+enum class Law { Linear, LinearEpsd, Hertz, HertzEpsd, HertzSds, Mepa, MepaEpsd };
 
-bool rolls(const Law law) { return law == Law::LinearEpsd || law == Law::HertzEpsd || law == Law::MepaEpsd; }
+bool rolls(const Law law) {
+  return law == Law::LinearEpsd || law == Law::HertzEpsd || law == Law::HertzSds || law == Law::MepaEpsd;
+}
+bool is_sds(const Law law) { return law == Law::HertzSds; }
 bool is_linear(const Law law) { return law == Law::Linear || law == Law::LinearEpsd; }
 bool is_mepa(const Law law) { return law == Law::Mepa || law == Law::MepaEpsd; }
 const char* name_of(const Law law) {
@@ -40,22 +43,30 @@ const char* name_of(const Law law) {
     case Law::LinearEpsd: return "linear + EPSD";
     case Law::Hertz: return "Hertz-Mindlin";
     case Law::HertzEpsd: return "Hertz-Mindlin + EPSD";
+    case Law::HertzSds: return "Hertz-Mindlin + SDS";
     case Law::Mepa: return "MEPA";
     case Law::MepaEpsd: return "MEPA + EPSD";
   }
   return "";
 }
 
-// A parameter set; EPSD's keys (mu_r, eta_r) left out for a law without rolling resistance.
+// A parameter set with the keys of the law's rolling model alone: mu_r for both, eta_r for
+// EPSD, k_r and gamma_r for SDS; none without rolling resistance.
 ParamSet law_params(const Law law, std::initializer_list<std::pair<const char*, double>> kv) {
   ParamSet p;
-  for (auto& [k, v] : kv)
-    if (rolls(law) || (std::strcmp(k, "mu_r") != 0 && std::strcmp(k, "eta_r") != 0)) p.set(k, v);
+  for (auto& [k, v] : kv) {
+    const std::string key = k;
+    const bool epsd_key = key == "eta_r", sds_key = key == "k_r" || key == "gamma_r";
+    if (key == "mu_r" || epsd_key || sds_key) {
+      if (!rolls(law) || (epsd_key && is_sds(law)) || (sds_key && !is_sds(law))) continue;
+    }
+    p.set(k, v);
+  }
   return p;
 }
 
 // Where the lanes' history records (lanes.hpp) keep what the test sets and reads, in bytes:
-// the tangential spring, its last stiffness (none: npos), EPSD's spring (none: npos); MEPA's
+// the tangential spring, its last stiffness (none: npos), EPSD's or SDS's spring (none: npos); MEPA's
 // Dmax, Dp, branch at 0, 8, 16.
 struct Layout {
   size_t size, fs, kt_prev, mk;
@@ -68,6 +79,8 @@ Layout layout_of(const Law law) {
     case Law::Hertz: return {sizeof(HertzLaneHistory), 0, offsetof(HertzLaneHistory, kt_prev), kNone};
     case Law::HertzEpsd:
       return {sizeof(HertzEpsdLaneHistory), 0, offsetof(HertzEpsdLaneHistory, kt_prev), offsetof(HertzEpsdLaneHistory, mk)};
+    case Law::HertzSds:
+      return {sizeof(HertzSdsLaneHistory), 0, offsetof(HertzSdsLaneHistory, kt_prev), offsetof(HertzSdsLaneHistory, fk)};
     case Law::Mepa: return {sizeof(MepaLaneHistory), offsetof(MepaLaneHistory, fs), offsetof(MepaLaneHistory, kt_prev), kNone};
     case Law::MepaEpsd:
       return {sizeof(MepaEpsdLaneHistory), offsetof(MepaEpsdLaneHistory, fs), offsetof(MepaEpsdLaneHistory, kt_prev),
@@ -81,7 +94,7 @@ Layout layout_of(const Law law) {
 // their own.
 std::unique_ptr<System> make_bed(Law law, int threads) {
   std::unique_ptr<System> s;
-  const char* const rolling = rolls(law) ? "epsd" : "none";
+  const char* const rolling = is_sds(law) ? "sds" : rolls(law) ? "epsd" : "none";
   if (is_linear(law)) {
     s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", rolling,
                     law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 1e-5, {0, 0, -200.0}, 3e-4);
@@ -111,12 +124,15 @@ std::unique_ptr<System> make_bed(Law law, int threads) {
     s->set_model(make_contact_model("mepa", rolling), {aa, ab, ab, bb});
   } else {
     s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", rolling,
-                    law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
-    // a-a: no rolling damping; a-b: limit_damping, rolling damping; b-b: others.
-    const ParamSet aa = law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
-    const ParamSet ab = law_params(
-        law, {{"e", 0.2}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"limit_damping", 1}, {"damp_t", 0.5}});
-    const ParamSet bb = law_params(law, {{"e", 0.9}, {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+                    law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 300}}), 5e-6, {0, 0, -200.0}, 3e-4);
+    // a-a: no rolling damping; a-b: limit_damping, rolling damping; b-b: others. SDS: its
+    // spring about the tangential one's stiffness (some hundreds of N/m), a dashpot a fifth
+    // to half of critical for a particle's mass (about 1e-5 kg).
+    const ParamSet aa = law_params(law, {{"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 300}});
+    const ParamSet ab = law_params(law, {{"e", 0.2}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"k_r", 100},
+                                         {"gamma_r", 0.01}, {"limit_damping", 1}, {"damp_t", 0.5}});
+    const ParamSet bb =
+        law_params(law, {{"e", 0.9}, {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}, {"k_r", 500}, {"gamma_r", 0.03}});
     s->set_model(make_contact_model("hertz_mindlin", rolling), {aa, ab, ab, bb});
   }
   s->cfg.threads = threads;
@@ -210,6 +226,7 @@ bool on_lanes_of(const Law law, const System& s) {
     case Law::LinearEpsd: return on_lanes<LinearEpsdLaw>(s);
     case Law::Hertz: return on_lanes<HertzLaw>(s);
     case Law::HertzEpsd: return on_lanes<HertzEpsdLaw>(s);
+    case Law::HertzSds: return on_lanes<HertzSdsLaw>(s);
     case Law::Mepa: return on_lanes<MepaLaw>(s);
     case Law::MepaEpsd: return on_lanes<MepaEpsdLaw>(s);
   }
@@ -234,7 +251,8 @@ void contact_by_contact(Law law, bool wide) {
   auto rec = [&](std::vector<std::byte>& d, size_t k) { return d.data() + k * stride; };
   // Tangential springs of 1e-9 N to 1 N (sticking to sliding); Hertz-Mindlin: a last stiffness
   // of zero (a new contact) or 10 to 10^4 N/m (below and above the current 8 G* a, some
-  // hundreds of N/m here), rolling springs of 1e-12 to 1e-5 N m (limit mu_r R* F_c ~ 1e-8).
+  // hundreds of N/m here), rolling springs of 1e-12 to 1e-5 N m (limit mu_r R* F_c ~ 1e-8;
+  // SDS: forces, as the tangential ones).
   Rng rng(17);
   size_t touching = 0, parted = 0, small_turn = 0, frozen_partner = 0;
   for (size_t i = 0; i < P.size(); ++i) {
@@ -252,7 +270,9 @@ void contact_by_contact(Law law, bool wide) {
         std::memcpy(rec(nl.hist.data, k) + lay.kt_prev, &kt_prev, sizeof kt_prev);
       }
       if (rolling) {
-        const Vec3 mk = random_history(rng, n, -12, -5, small_turn);
+        // EPSD's moment; SDS's spring is a force, in the tangential spring's range.
+        const Vec3 mk = is_sds(law) ? random_history(rng, n, -9, 0, small_turn)
+                                    : random_history(rng, n, -12, -5, small_turn);
         std::memcpy(rec(nl.hist.data, k) + lay.mk, &mk, sizeof mk);
       }
       if (is_mepa(law) && touch) {
@@ -387,6 +407,7 @@ COHDEM_LANES_TESTS(LinearLaw, Law::Linear)
 COHDEM_LANES_TESTS(LinearEpsd, Law::LinearEpsd)
 COHDEM_LANES_TESTS(HertzMindlin, Law::Hertz)
 COHDEM_LANES_TESTS(HertzMindlinEpsd, Law::HertzEpsd)
+COHDEM_LANES_TESTS(HertzMindlinSds, Law::HertzSds)
 COHDEM_LANES_TESTS(Mepa, Law::Mepa)
 COHDEM_LANES_TESTS(MepaEpsd, Law::MepaEpsd)
 #undef COHDEM_LANES_TESTS
