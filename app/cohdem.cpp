@@ -182,8 +182,8 @@ int main(int argc, char** argv) {
         for (const auto& s : m->specs())
           std::printf("  %-16s %-10s %s%s\n", s.name, s.unit, s.doc, s.required ? " (required)" : "");
       }
-      std::printf("rolling: none, epsd (adds mu_r, eta_r), cdt (adds mu_r); walton: none (its bending moment "
-                  "fills the rolling slot)\n");
+      std::printf("rolling: none, epsd (adds mu_r, eta_r), cdt (adds mu_r), sds (adds k_r N/m, gamma_r kg/s, "
+                  "mu_r); walton: none (its bending moment fills the rolling slot)\n");
       return 0;
     }
   } catch (const InputError& e) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """What a contact model costs in a whole run: LAMMPS's chute (32,000 spheres) with the linear
 model (bench/chute.toml), the linear model + EPSD rolling (bench/chute_epsd.toml),
-Hertz-Mindlin + EPSD rolling (bench/chute_hmr.toml) and MEPA n = 3/2 + EPSD rolling
+Hertz-Mindlin + EPSD rolling (bench/chute_hm_epsd.toml) and MEPA n = 3/2 + EPSD rolling
 (bench/chute_mepa.toml), run by cohdem in one invocation, interleaved.
 
   python3 bench/model_cost.py                   # 5 runs of 1000 steps each, 1 thread
@@ -27,7 +27,7 @@ import sys
 
 from peer_compare import HERE, REPO, find_chute_data  # same folder
 
-CASES = [("linear", "chute.toml"), ("linear+epsd", "chute_epsd.toml"), ("hertz_mindlin+epsd", "chute_hmr.toml"),
+CASES = [("linear", "chute.toml"), ("linear+epsd", "chute_epsd.toml"), ("hertz_mindlin+epsd", "chute_hm_epsd.toml"),
          ("mepa+epsd", "chute_mepa.toml")]
 
 

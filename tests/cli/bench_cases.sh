@@ -52,7 +52,7 @@ print(("ok   " if ok else "FAIL ") + sys.argv[2], s["particles"], "particles,", 
 sys.exit(0 if ok else 1)
 PY
 }
-for c in chute chute_epsd chute_hmr chute_mepa; do
+for c in chute chute_epsd chute_hmr chute_hm_epsd chute_mepa; do
   python3 "$src/bench/lammps_data_to_case.py" "$data" "$src/bench/$c.toml" -o "$work/$c.toml" > /dev/null || { echo "FAIL convert $c"; fail=$((fail+1)); continue; }
   check_case "$c" "$work/$c.toml"
 done
