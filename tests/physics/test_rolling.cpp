@@ -148,16 +148,23 @@ TEST(Rolling, SlideThenRollThenStop) {
   }
 }
 
-// EPSD on an incline: holds below atan(mu_r), rolls above at 5/7 g (sin - mu_r cos).
-// The tilt is ramped over 0.05 s (quasi-statically) so no overshoot loads the springs.
-TEST(Rolling, EpsdInclineHoldsBelowAtanMuR) {
+namespace {
+
+// A sphere on an incline whose tilt is ramped over 0.05 s (quasi-statically, so no overshoot
+// loads the springs) to alpha = frac atan(mu_r): held below atan(mu_r), rolling above at
+// 5/7 g (sin - mu_r cos). Held, the friction force F = m g sin(alpha) balances the slope on
+// the tangential spring k_t = 2/7 kn (F/k_t of slip), and the rolling spring carries the
+// moment M = F R of gravity about the contact point, moving the centre by F times
+// `compliance` (the rolling spring's, as a displacement of the centre per unit force).
+constexpr double kInclineMuR = 0.1;
+void incline_holds_below_atan_mu_r(const char* rolling, const char* label, const double compliance) {
   const double m = sphere_mass(kRho, kR);
   const double tc = M_PI * std::sqrt(m / kKn), dt = tc / 20;
-  const double mu = 1.0, mu_r = 0.1, crit = std::atan(mu_r);
+  const double mu = 1.0, mu_r = kInclineMuR, crit = std::atan(mu_r);
   for (double frac : {0.5, 0.95, 1.05, 1.5}) {
     const double alpha = frac * crit;
     ASSERT_LT(std::tan(alpha), 3.5 * mu);  // rolls without sliding
-    auto s = sphere_on_plane("epsd", mu, mu_r, {0, 0, -kG}, dt);
+    auto s = sphere_on_plane(rolling, mu, mu_r, {0, 0, -kG}, dt);
     s->prepare();
     const double t_ramp = 0.05;
     auto tilt = [&](double t) {
@@ -166,22 +173,19 @@ TEST(Rolling, EpsdInclineHoldsBelowAtanMuR) {
     };
     while (s->time < t_ramp) { s->step_once(); tilt(s->time); }
     auto& P = s->particles;
-    const std::string tag = "alpha/atan(mu_r)=" + std::to_string(frac).substr(0, 4);
+    const std::string tag = std::string(label) + " alpha/atan(mu_r)=" + std::to_string(frac).substr(0, 4);
     if (frac < 1) {
       s->run(uint64_t(0.1 / dt));
-      // Held, at the static deflection: the friction force F = m g sin(alpha) balances the
-      // slope, on the tangential spring k_t = 2/7 kn (F/k_t of slip), and the rolling spring
-      // k_r = 2.25 kn mu_r^2 R^2 (Ai et al. 2011 Eq. 15) carries M = F R (rotation M/k_r about
-      // the contact point, moving the centre by R M/k_r). Tolerance 1e-3 relative (lever arm
-      // R - delta, delta/R = 1e-6; the damped ringing after the ramp has died out).
+      // Tolerance 1e-3 relative (lever arm R - delta, delta/R = 1e-6; the damped ringing
+      // after the ramp has died out).
       const double F = m * kG * std::sin(alpha), kt = 2.0 / 7.0 * kKn;
-      const double M = F * kR, kr = 2.25 * kKn * mu_r * mu_r * kR * kR;
-      const double x_ref = F / kt + kR * M / kr;
+      const double x_ref = F / kt + F * compliance;
       EXPECT_NEAR(P.x[0].x / x_ref, 1.0, 1e-3) << tag;
-      // At rest: eta_r = 0.3 and damp_t = 1 damp the ringing to round-off within 0.1 s.
+      // At rest: the rolling damping (EPSD eta_r = 0.3, SDS gamma_r a third of critical) and
+      // damp_t = 1 damp the ringing to round-off within 0.1 s.
       EXPECT_LT(std::fabs(P.v[0].x), 1e-12) << tag;
-      report(("incline EPSD held: static displacement (m) " + tag).c_str(), P.x[0].x, x_ref, 1e-3, "rel");
-      report(("incline EPSD held: speed (m/s) " + tag).c_str(), P.v[0].x, 0.0, 1e-12, "|v|<");
+      report(("incline held: static displacement (m) " + tag).c_str(), P.x[0].x, x_ref, 1e-3, "rel");
+      report(("incline held: speed (m/s) " + tag).c_str(), P.v[0].x, 0.0, 1e-12, "|v|<");
     } else {
       // Rolls: acceleration over 0.05..0.15 s after the ramp (the rolling spring at its limit).
       s->run(uint64_t(0.05 / dt));
@@ -192,53 +196,21 @@ TEST(Rolling, EpsdInclineHoldsBelowAtanMuR) {
       // The rolling moment is mu_r R* F_c with F_c the normal force at rest (m g cos(alpha));
       // lever arm R - delta (delta/R = 1e-6); the rolling spring stays at its limit while
       // the sphere accelerates. Tolerance 1e-3 relative.
-      const double tol = 1e-3 * a_ref;
-      EXPECT_NEAR(a, a_ref, tol) << tag;
-      report(("incline EPSD rolling acceleration (m/s^2) " + tag).c_str(), a, a_ref, 1e-3, "rel");
+      EXPECT_NEAR(a, a_ref, 1e-3 * a_ref) << tag;
+      report(("incline rolling acceleration (m/s^2) " + tag).c_str(), a, a_ref, 1e-3, "rel");
     }
   }
 }
 
-// SDS (LAMMPS's `rolling sds`) on an incline, as EPSD above: the moment's limit is the same,
-// mu_r R* F_c (R* = R on a wall), so the sphere holds below atan(mu_r) and rolls above at
-// 5/7 g (sin - mu_r cos). Held, the spring carries the rolling force f = M/R = F (M = F R, the
-// moment of gravity about the contact point) on its displacement xi = F/k_r, which for a
-// sphere rolling on a plane is the distance its centre rolled: x = F/k_t + F/k_r.
-TEST(Rolling, SdsInclineHoldsBelowAtanMuR) {
-  const double m = sphere_mass(kRho, kR);
-  const double tc = M_PI * std::sqrt(m / kKn), dt = tc / 20;
-  const double mu = 1.0, mu_r = 0.1, crit = std::atan(mu_r);
-  for (double frac : {0.5, 0.95, 1.05, 1.5}) {
-    const double alpha = frac * crit;
-    auto s = sphere_on_plane("sds", mu, mu_r, {0, 0, -kG}, dt);
-    s->prepare();
-    const double t_ramp = 0.05;
-    auto tilt = [&](double t) {
-      const double a = alpha * std::min(1.0, t / t_ramp);
-      s->cfg.gravity = {kG * std::sin(a), 0, -kG * std::cos(a)};
-    };
-    while (s->time < t_ramp) { s->step_once(); tilt(s->time); }
-    auto& P = s->particles;
-    const std::string tag = "alpha/atan(mu_r)=" + std::to_string(frac).substr(0, 4);
-    if (frac < 1) {
-      s->run(uint64_t(0.1 / dt));
-      // Tolerance 1e-3 relative: the lever arm R - delta (delta/R = 1e-6), and the ringing
-      // after the ramp damped (damp_t = 1, gamma_r a third of critical) within 0.1 s.
-      const double F = m * kG * std::sin(alpha), kt = 2.0 / 7.0 * kKn;
-      const double x_ref = F / kt + F / kSdsK;
-      EXPECT_NEAR(P.x[0].x / x_ref, 1.0, 1e-3) << tag;
-      EXPECT_LT(std::fabs(P.v[0].x), 1e-12) << tag;
-      report(("incline SDS held: static displacement (m) " + tag).c_str(), P.x[0].x, x_ref, 1e-3, "rel");
-    } else {
-      s->run(uint64_t(0.05 / dt));
-      const double va = P.v[0].x, ta = s->time;
-      s->run(uint64_t(0.1 / dt));
-      const double a = (P.v[0].x - va) / (s->time - ta);
-      const double a_ref = 5.0 / 7.0 * kG * (std::sin(alpha) - mu_r * std::cos(alpha));
-      // At the limit the rolling force is mu_r F_c along the spring's direction; the dashpot
-      // is inside the limit (the spring is reset to give it): tolerance 1e-3 relative.
-      EXPECT_NEAR(a, a_ref, 1e-3 * a_ref) << tag;
-      report(("incline SDS rolling acceleration (m/s^2) " + tag).c_str(), a, a_ref, 1e-3, "rel");
-    }
-  }
+}  // namespace
+
+// EPSD: k_r = 2.25 kn mu_r^2 R^2 (Ai et al. 2011 Eq. 15) turns by M/k_r about the contact
+// point, moving the centre by R M/k_r = F R^2/k_r.
+TEST(Rolling, EpsdInclineHoldsBelowAtanMuR) {
+  incline_holds_below_atan_mu_r("epsd", "EPSD", kR * kR / (2.25 * kKn * kInclineMuR * kInclineMuR * kR * kR));
 }
+
+// SDS (LAMMPS's `rolling sds`): the moment's limit is EPSD's, mu_r R* F_c (R* = R on a wall).
+// Held, its spring carries the rolling force M/R = F on its displacement xi = F/k_r, which for
+// a sphere rolling on a plane is the distance its centre rolled.
+TEST(Rolling, SdsInclineHoldsBelowAtanMuR) { incline_holds_below_atan_mu_r("sds", "SDS", 1.0 / kSdsK); }
