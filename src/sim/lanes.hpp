@@ -3,8 +3,8 @@
 // for the linear law (LAMMPS's chute, the poured packing), Hertz-Mindlin (the chute's
 // `granular hmr` variant, the packed beds) and MEPA (the ring shear tester's law; where every
 // material pair has fixed stiffnesses, n = 1 or 3/2 and no dp_shift: lane_usable, other MEPA
-// settings run the scalar law), each with rolling resistance `none` or `epsd` (Hertz-Mindlin
-// also `sds`, the rolling law of the chute's LAMMPS port) and no twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
+// settings run the scalar law), each with rolling resistance `none`, `epsd` or `sds` and no
+// twisting. The force loop (sim/force_kernel.hpp) screens a batch of list entries as before;
 // the touching ones are then evaluated here in groups of four (eight), and the loop adds their
 // results to the particles' sums one contact at a time, in list order.
 //
@@ -41,16 +41,19 @@ template <class R>
 using MepaLawR = ContactLaw<MepaNormal, ViscousDamping, HystTangential<MepaNormal>, R, NoTwisting>;
 using LinearLaw = LinearLawR<NoRolling>;
 using LinearEpsdLaw = LinearLawR<EpsdRolling>;
+using LinearSdsLaw = LinearLawR<SdsRolling>;
 using HertzLaw = HertzLawR<NoRolling>;
 using HertzEpsdLaw = HertzLawR<EpsdRolling>;
 using HertzSdsLaw = HertzLawR<SdsRolling>;
 using MepaLaw = MepaLawR<NoRolling>;
 using MepaEpsdLaw = MepaLawR<EpsdRolling>;
+using MepaSdsLaw = MepaLawR<SdsRolling>;
 
 /// A material pair's parameters of the linear law, as the lanes read them: each a value the
 /// scalar law computes from its Params in the same way (2 beta, the resolved kt), so that the
 /// lanes' results match bit for bit. Switches are lane masks (all bits set: on; 0: off), used
-/// as they are by the lanes' selects. The rolling fields are EPSD's (0 without rolling).
+/// as they are by the lanes' selects. The rolling fields are EPSD's (mu_r, two_eta_r, damped)
+/// and SDS's (mu_r, k_r, gamma_r), 0 where the law has none.
 struct LinearLaneParams {
   double kn;
   double two_beta;  ///< 2.0 * beta (the scalar law's first product)
@@ -61,9 +64,11 @@ struct LinearLaneParams {
   double mu_r;
   double two_eta_r;  ///< eta_r * 2.0 (exact)
   uint64_t damped;   ///< mask: eta_r > 0 (EPSD's viscous part)
+  double k_r, gamma_r;  ///< SDS's spring and dashpot
 };
 LinearLaneParams lane_params(const LinearLaw::Params& p);
 LinearLaneParams lane_params(const LinearEpsdLaw::Params& p);
+LinearLaneParams lane_params(const LinearSdsLaw::Params& p);
 
 /// The same for Hertz-Mindlin.
 struct HertzLaneParams {
@@ -76,7 +81,7 @@ struct HertzLaneParams {
   double mu_r;
   double two_eta_r;    ///< eta_r * 2.0 (exact)
   uint64_t damped;     ///< mask: eta_r > 0
-  double k_r, gamma_r;  ///< SDS's spring and dashpot (0 with EPSD or without rolling)
+  double k_r, gamma_r;  ///< SDS's spring and dashpot
 };
 HertzLaneParams lane_params(const HertzLaw::Params& p);
 HertzLaneParams lane_params(const HertzEpsdLaw::Params& p);
@@ -97,13 +102,16 @@ struct MepaLaneParams {
   double mu_r;
   double two_eta_r;   ///< eta_r * 2.0 (exact)
   uint64_t damped;    ///< mask: eta_r > 0
+  double k_r, gamma_r;  ///< SDS's spring and dashpot
 };
 MepaLaneParams lane_params(const MepaLaw::Params& p);
 MepaLaneParams lane_params(const MepaEpsdLaw::Params& p);
+MepaLaneParams lane_params(const MepaSdsLaw::Params& p);
 /// Whether a material pair's MEPA settings are those the lanes do (fixed k1, k2; n = 1 or
 /// 3/2; adhesion with the same exponent; no dp_shift).
 bool lane_usable(const MepaLaw::Params& p);
 bool lane_usable(const MepaEpsdLaw::Params& p);
+bool lane_usable(const MepaSdsLaw::Params& p);
 
 /// A material pair's lane parameters as the lanes read them: the fields (gathered lane by
 /// lane in a group of mixed pairs) and each field again in four copies, so that a group of
@@ -123,14 +131,17 @@ struct alignas(32) LaneParamsOf {
 
 /// The laws' histories as the lanes read them (same_layout below checks them against
 /// ContactLaw::State): the tangential spring, its last stiffness where it can fall, EPSD's
-/// spring; MEPA's largest and plastic overlaps and branch first.
+/// spring (mk) or SDS's (fk, the same place); MEPA's largest and plastic overlaps and branch
+/// first.
 struct LinearLaneHistory { Vec3 fs; };
 struct LinearEpsdLaneHistory { Vec3 fs; Vec3 mk; };
+struct LinearSdsLaneHistory { Vec3 fs; Vec3 fk; };
 struct HertzLaneHistory { Vec3 fs; double kt_prev; };
 struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
 struct HertzSdsLaneHistory { Vec3 fs; double kt_prev; Vec3 fk; };  ///< fk: SDS's spring force
 struct MepaLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; };
 struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
+struct MepaSdsLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 fk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
 /// parameters (nmat x nmat, row = species of i, LaneParamsOf the law's lane-parameter type) and the
@@ -168,13 +179,14 @@ struct LaneOut {
 using LaneEval = void (*)(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 /// The entry points, one list for both widths: X(law, suffix, rolling, width) for each law
 /// with lanes, naming law##suffix##_lanes_##width (linear_lanes_avx2, mepa_epsd_lanes_avx512,
-/// ...); lanes_body.hpp defines them from the law's group (law##_group) with EPSD rolling
-/// (rolling = true), without (false), or with SDS rolling (2; Hertz-Mindlin only). The
-/// eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit for bit): call
+/// ...); lanes_body.hpp defines them from the law's group (law##_group) with the rolling
+/// resistance `rolling` (kLaneNoRolling, kLaneEpsd, kLaneSds). The eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit for bit): call
 /// them only when screen_avx512_enabled().
-#define COHDEM_LANE_ENTRIES(X, width)                                                          \
-  X(linear, , false, width) X(linear, _epsd, true, width) X(hertz, , false, width)              \
-  X(hertz, _epsd, true, width) X(hertz, _sds, 2, width) X(mepa, , false, width) X(mepa, _epsd, true, width)
+inline constexpr int kLaneNoRolling = 0, kLaneEpsd = 1, kLaneSds = 2;
+#define COHDEM_LANE_ENTRIES(X, width)                                                                     \
+  X(linear, , kLaneNoRolling, width) X(linear, _epsd, kLaneEpsd, width) X(linear, _sds, kLaneSds, width)   \
+  X(hertz, , kLaneNoRolling, width) X(hertz, _epsd, kLaneEpsd, width) X(hertz, _sds, kLaneSds, width)      \
+  X(mepa, , kLaneNoRolling, width) X(mepa, _epsd, kLaneEpsd, width) X(mepa, _sds, kLaneSds, width)
 #define COHDEM_LANE_DECLARE(law, suffix, rolling, width) \
   void law##suffix##_lanes_##width(const LaneInput& in, const ScreenHits& hits, uint32_t h0, uint32_t cnt, LaneOut& out);
 /// Where the build is not for x86-64: entries that are never called (screen_avx2_enabled()
@@ -204,6 +216,8 @@ struct LaneLaw<LinearLaw> : LaneLawOf<LinearLaw, LinearLaneParams, linear_lanes_
 template <>
 struct LaneLaw<LinearEpsdLaw> : LaneLawOf<LinearEpsdLaw, LinearLaneParams, linear_epsd_lanes_avx2, linear_epsd_lanes_avx512> {};
 template <>
+struct LaneLaw<LinearSdsLaw> : LaneLawOf<LinearSdsLaw, LinearLaneParams, linear_sds_lanes_avx2, linear_sds_lanes_avx512> {};
+template <>
 struct LaneLaw<HertzLaw> : LaneLawOf<HertzLaw, HertzLaneParams, hertz_lanes_avx2, hertz_lanes_avx512> {};
 template <>
 struct LaneLaw<HertzEpsdLaw> : LaneLawOf<HertzEpsdLaw, HertzLaneParams, hertz_epsd_lanes_avx2, hertz_epsd_lanes_avx512> {};
@@ -216,6 +230,10 @@ struct LaneLaw<MepaLaw> : LaneLawOf<MepaLaw, MepaLaneParams, mepa_lanes_avx2, me
 template <>
 struct LaneLaw<MepaEpsdLaw> : LaneLawOf<MepaEpsdLaw, MepaLaneParams, mepa_epsd_lanes_avx2, mepa_epsd_lanes_avx512> {
   static bool usable(const MepaEpsdLaw::Params& p) { return lane_usable(p); }
+};
+template <>
+struct LaneLaw<MepaSdsLaw> : LaneLawOf<MepaSdsLaw, MepaLaneParams, mepa_sds_lanes_avx2, mepa_sds_lanes_avx512> {
+  static bool usable(const MepaSdsLaw::Params& p) { return lane_usable(p); }
 };
 
 /// The lane histories are the laws' State, byte for byte: the same size (std::bit_cast), the
@@ -248,6 +266,7 @@ constexpr bool same_layout() {
   return ok;
 }
 static_assert(same_layout<LinearLaneHistory, LinearLaw>() && same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>() &&
+                  same_layout<LinearSdsLaneHistory, LinearSdsLaw>() && same_layout<MepaSdsLaneHistory, MepaSdsLaw>() &&
                   same_layout<HertzLaneHistory, HertzLaw>() && same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>() &&
                   same_layout<HertzSdsLaneHistory, HertzSdsLaw>() &&
                   same_layout<MepaLaneHistory, MepaLaw>() && same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(),

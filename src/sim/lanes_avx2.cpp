@@ -24,11 +24,10 @@ namespace {
 
 constexpr uint64_t mask_of(const bool on) { return on ? ~uint64_t(0) : 0; }
 
-/// The rolling fields of the lane parameters: EPSD's, or SDS's (Hertz-Mindlin's only), 0
-/// where the law has none.
+/// The rolling fields of the lane parameters: EPSD's or SDS's, 0 where the law has none.
 template <class Q, class R>
 void rolling_params(Q& q, const R& r) {
-  if constexpr (requires { q.k_r; }) q.k_r = q.gamma_r = 0;
+  q.k_r = q.gamma_r = 0;
   if constexpr (requires { r.k_r; }) {
     q.mu_r = r.mu_r;
     q.k_r = r.k_r;
@@ -109,13 +108,16 @@ bool mepa_usable(const P& p) {
 
 LinearLaneParams lane_params(const LinearLaw::Params& p) { return linear_params(p); }
 LinearLaneParams lane_params(const LinearEpsdLaw::Params& p) { return linear_params(p); }
+LinearLaneParams lane_params(const LinearSdsLaw::Params& p) { return linear_params(p); }
 HertzLaneParams lane_params(const HertzLaw::Params& p) { return hertz_params(p); }
 HertzLaneParams lane_params(const HertzEpsdLaw::Params& p) { return hertz_params(p); }
 HertzLaneParams lane_params(const HertzSdsLaw::Params& p) { return hertz_params(p); }
 MepaLaneParams lane_params(const MepaLaw::Params& p) { return mepa_params(p); }
 MepaLaneParams lane_params(const MepaEpsdLaw::Params& p) { return mepa_params(p); }
+MepaLaneParams lane_params(const MepaSdsLaw::Params& p) { return mepa_params(p); }
 bool lane_usable(const MepaLaw::Params& p) { return mepa_usable(p); }
 bool lane_usable(const MepaEpsdLaw::Params& p) { return mepa_usable(p); }
+bool lane_usable(const MepaSdsLaw::Params& p) { return mepa_usable(p); }
 
 #if defined(__x86_64__)
 

@@ -269,6 +269,22 @@ LANES_FN L3 sds4(const Group& G, L3& fk, const V fc, const V k_r, const V gamma_
   return cross3(G.n, f) * G.rstar;
 }
 
+/// A law's lane history with the rolling resistance kRoll (kLaneNoRolling, kLaneEpsd,
+/// kLaneSds): SDS's spring force sits where EPSD's moment does.
+template <int kRoll, class None, class Epsd, class Sds>
+using RollingHistory =
+    std::conditional_t<kRoll == kLaneSds, Sds, std::conditional_t<kRoll == kLaneEpsd, Epsd, None>>;
+/// The rolling moment on i of a group with EPSD (c: epsd_coef4) or SDS, the spring mk (EPSD's
+/// moment, SDS's force) already turned into the new tangent plane; LP: the law's lane
+/// parameters, read through par.
+template <int kRoll, class LP, class ParT>
+LANES_FN L3 rolling4(const Group& G, L3& mk, const EpsdCoef& c, const V fc, const ParT& par, const V dt) {
+  if constexpr (kRoll == kLaneSds)
+    return sds4(G, mk, fc, par(&LP::k_r), par(&LP::gamma_r), par(&LP::mu_r), dt);
+  else
+    return epsd4(G, mk, c, fc, par(&LP::mu_r), par(&LP::damped), dt);
+}
+
 /// ContactLaw::evaluate's assembly for two spheres (lever arms r - delta/2) and the stores.
 LANES_FN void put(const Group& G, const uint32_t g, const M alive, const V fn, const L3& ft, const L3* mr, const V a,
                   LaneOut& out) {
@@ -331,6 +347,8 @@ LANES_FN void store_records(const Group& G, H* h, const At<T>&... parts) {
 static_assert(sizeof(LinearLaneHistory) == 24 && offsetof(LinearLaneHistory, fs) == 0);
 static_assert(sizeof(LinearEpsdLaneHistory) == 48 && offsetof(LinearEpsdLaneHistory, fs) == 0 &&
               offsetof(LinearEpsdLaneHistory, mk) == 24);
+static_assert(sizeof(LinearSdsLaneHistory) == 48 && offsetof(LinearSdsLaneHistory, fs) == 0 &&
+              offsetof(LinearSdsLaneHistory, fk) == 24);
 static_assert(sizeof(HertzLaneHistory) == 32 && offsetof(HertzLaneHistory, fs) == 0 &&
               offsetof(HertzLaneHistory, kt_prev) == 24);
 static_assert(sizeof(HertzEpsdLaneHistory) == 56 && offsetof(HertzEpsdLaneHistory, fs) == 0 &&
@@ -343,13 +361,17 @@ static_assert(sizeof(MepaLaneHistory) == 56 && offsetof(MepaLaneHistory, Dp) == 
 static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory, Dp) == 8 &&
               offsetof(MepaEpsdLaneHistory, branch) == 16 && offsetof(MepaEpsdLaneHistory, fs) == 24 &&
               offsetof(MepaEpsdLaneHistory, kt_prev) == 48 && offsetof(MepaEpsdLaneHistory, mk) == 56);
+static_assert(sizeof(MepaSdsLaneHistory) == 80 && offsetof(MepaSdsLaneHistory, Dp) == 8 &&
+              offsetof(MepaSdsLaneHistory, branch) == 16 && offsetof(MepaSdsLaneHistory, fs) == 24 &&
+              offsetof(MepaSdsLaneHistory, kt_prev) == 48 && offsetof(MepaSdsLaneHistory, fk) == 56);
 
 /// One group of contacts of the linear law (after their geometry); kU: one material pair;
-/// kRoll: with EPSD rolling resistance.
-template <bool kU, bool kRoll>
+/// kRoll: its rolling resistance (kLaneNoRolling, kLaneEpsd, kLaneSds).
+template <bool kU, int kRoll>
 LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
-  using LH = std::conditional_t<kRoll, LinearEpsdLaneHistory, LinearLaneHistory>;
+  constexpr bool kRolls = kRoll != kLaneNoRolling;
+  using LH = RollingHistory<kRoll, LinearLaneHistory, LinearEpsdLaneHistory, LinearSdsLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -357,7 +379,7 @@ LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g
   // history and the normal, so the out-of-order window overlaps their divisions with the
   // laws' chains below. {fs}, or {fs, mk} read as {fs, mk.x} and {mk.y, mk.z}.
   L3 fs, mk;
-  if constexpr (kRoll) {
+  if constexpr (kRolls) {
     const Cols h0 = load_quads(H, G.k, 0);
     V mk_y, mk_z;
     load_pairs(H, G.k, 4, mk_y, mk_z);
@@ -379,10 +401,11 @@ LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g
   // LinearNormal's contact radius, read only when asked for.
   const V a = in.want_a ? sqrtv(G.rstar * G.delta) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended: LaneOut::alive).
-  if constexpr (kRoll) {
-    // (kn is a parameter here: the coefficient computed at the start measured 3-4 % slower)
-    const EpsdCoef ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
-    const L3 mr = epsd4(G, mk, ec, fc, par(&LP::mu_r), par(&LP::damped), splat(in.dt));
+  if constexpr (kRolls) {
+    // (kn is a parameter here: EPSD's coefficient computed at the start measured 3-4 % slower)
+    EpsdCoef ec{};
+    if constexpr (kRoll == kLaneEpsd) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
+    const L3 mr = rolling4<kRoll, LP>(G, mk, ec, fc, par, splat(in.dt));
     put(G, g, alive, fn, ft, &mr, a, out);
     store_records(G, H, At<Quads>{0, quads(fs.x, fs.y, fs.z, mk.x)}, At<Pairs>{4, pairs(mk.y, mk.z)});
   } else {
@@ -400,13 +423,12 @@ LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g
 }
 
 /// One group of contacts of Hertz-Mindlin (after their geometry); kU: one material pair;
-/// kRoll: with EPSD rolling resistance (1), with SDS (2; its spring force where EPSD keeps its
-/// moment, in the same record layout), or without (0).
+/// kRoll: its rolling resistance (kLaneNoRolling, kLaneEpsd, kLaneSds).
 template <bool kU, int kRoll>
 LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
-  constexpr bool kEpsd = kRoll == 1, kSds = kRoll == 2;
-  using LH = std::conditional_t<kSds, HertzSdsLaneHistory, std::conditional_t<kEpsd, HertzEpsdLaneHistory, HertzLaneHistory>>;
+  constexpr bool kRolls = kRoll != kLaneNoRolling;
+  using LH = RollingHistory<kRoll, HertzLaneHistory, HertzEpsdLaneHistory, HertzSdsLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = HertzLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -418,7 +440,7 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   V kt_prev = h0.v[3];
   rotate_into_plane4(fs, G.n);
   L3 mk{};
-  if constexpr (kRoll != 0) {
+  if constexpr (kRolls) {
     const Cols h1 = load_quads(H, G.k, 3);
     mk = L3{h1.v[1], h1.v[2], h1.v[3]};
     rotate_into_plane4(mk, G.n);
@@ -428,7 +450,7 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   const V a = sqrtv(G.rstar * G.delta);
   const V kn = par(&LP::two_Estar) * a;
   EpsdCoef ec{};
-  if constexpr (kEpsd) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
+  if constexpr (kRoll == kLaneEpsd) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
   const V f_el = (2.0 / 3.0) * kn * G.delta;
   V gamma;
   const V fn = f_el + damping4(par(&LP::two_beta), par(&LP::limit), G.mstar, kn, G.vn, f_el, gamma);
@@ -438,9 +460,8 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   const L3 ft = spring_prev4(fs, kt_prev, G.vt, kt, dt, par(&LP::damp_kt) * gamma, par(&LP::mu), fc);
   // The records back (the force loop resets those of contacts that ended).
   const Quads a0 = quads(fs.x, fs.y, fs.z, kt_prev);
-  if constexpr (kRoll != 0) {
-    const L3 mr = kSds ? sds4(G, mk, fc, par(&LP::k_r), par(&LP::gamma_r), par(&LP::mu_r), dt)
-                       : epsd4(G, mk, ec, fc, par(&LP::mu_r), par(&LP::damped), dt);
+  if constexpr (kRolls) {
+    const L3 mr = rolling4<kRoll, LP>(G, mk, ec, fc, par, dt);
     put(G, g, alive, fn, ft, &mr, a, out);
     // {kt_prev, mk} (SDS: fk) at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
@@ -450,12 +471,13 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   }
 }
 
-/// One group of contacts of MEPA (after their geometry); kU: one material pair; kRoll: with
-/// EPSD rolling resistance.
-template <bool kU, bool kRoll>
+/// One group of contacts of MEPA (after their geometry); kU: one material pair; kRoll: its
+/// rolling resistance (kLaneNoRolling, kLaneEpsd, kLaneSds).
+template <bool kU, int kRoll>
 LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
-  using LH = std::conditional_t<kRoll, MepaEpsdLaneHistory, MepaLaneHistory>;
+  constexpr bool kRolls = kRoll != kLaneNoRolling;
+  using LH = RollingHistory<kRoll, MepaLaneHistory, MepaEpsdLaneHistory, MepaSdsLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = MepaLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -468,10 +490,9 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   L3 fs{h1.v[0], h1.v[1], h1.v[2]};
   V kt_prev = h1.v[3];
   rotate_into_plane4(fs, G.n);
-  if constexpr (kRoll) {
-    mk = gather3(H, G.k, &LH::mk);
-    rotate_into_plane4(mk, G.n);
-  }
+  if constexpr (kRoll == kLaneSds) mk = gather3(H, G.k, &LH::fk);
+  if constexpr (kRoll == kLaneEpsd) mk = gather3(H, G.k, &LH::mk);
+  if constexpr (kRolls) rotate_into_plane4(mk, G.n);
   V Dmax, Dp;
   load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with
@@ -494,7 +515,7 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   const V f_adh = A - f0;
   const V kn = par(&LP::n_k2) * dn1;
   EpsdCoef ec{};
-  if constexpr (kRoll) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
+  if constexpr (kRoll == kLaneEpsd) ec = epsd_coef4(G, kn, par(&LP::mu_r), par(&LP::two_eta_r), par(&LP::damped));
   const V k_load = k1 * dn1;
   // ViscousDamping.
   const V gamma = par(&LP::gamma_n);
@@ -502,10 +523,11 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   const V fc = max0(sel(par(&LP::offset), f_el + f_adh, f_el));  // coulomb_base
   // HystTangential: a fixed kt, or kt_ratio k1 delta^(n-1) kt_mult.
   const V kt = sel(par(&LP::kt_const), par(&LP::kt_c), par(&LP::kt_ratio) * k_load * par(&LP::kt_mult));
-  // EPSD before the tangential spring: the two chains are independent, and the rolling one
-  // then overlaps the spring's instead of ending the group (1-2 % faster, BM_ForceAlternate).
+  // The rolling before the tangential spring: the two chains are independent, and the rolling
+  // one then overlaps the spring's instead of ending the group (EPSD: 1-2 % faster,
+  // BM_ForceAlternate).
   L3 mr{};
-  if constexpr (kRoll) mr = epsd4(G, mk, ec, fc, par(&LP::mu_r), par(&LP::damped), dt);
+  if constexpr (kRolls) mr = rolling4<kRoll, LP>(G, mk, ec, fc, par, dt);
   const L3 ft = spring_prev4(fs, kt_prev, G.vt, kt, dt, par(&LP::gamma_t), par(&LP::mu), fc);
   const V a = in.want_a ? sqrtv(G.rstar * d) : splat(0.0);
   // The records back (the force loop resets those of contacts that ended). The branch is an
@@ -513,7 +535,7 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   // stays zero as the scalar law leaves it. Without rolling: {Dmax, Dp, branch, fs.x} at 0
   // and {fs, kt_prev} at 24 (fs.x written twice).
   const M br = load ? msplat(1) : (adh ? msplat(3) : msplat(2));
-  if constexpr (kRoll) {
+  if constexpr (kRolls) {
     // {Dmax, Dp, branch, fs.x} at 0 and {fs.y, fs.z} at 32 before the forces' stores,
     // {kt_prev, mk} at 48 after them.
     store_records(G, H, At<Quads>{0, quads(Dmax1, Dp1, V(br), fs.x)}, At<Pairs>{4, pairs(fs.y, fs.z)});

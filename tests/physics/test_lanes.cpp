@@ -29,23 +29,25 @@ namespace {
 
 constexpr double kL = 0.03;  // periodic cell in x and y, m
 
-enum class Law { Linear, LinearEpsd, Hertz, HertzEpsd, HertzSds, Mepa, MepaEpsd };
+enum class Law { Linear, LinearEpsd, LinearSds, Hertz, HertzEpsd, HertzSds, Mepa, MepaEpsd, MepaSds };
 
+bool is_sds(const Law law) { return law == Law::LinearSds || law == Law::HertzSds || law == Law::MepaSds; }
 bool rolls(const Law law) {
-  return law == Law::LinearEpsd || law == Law::HertzEpsd || law == Law::HertzSds || law == Law::MepaEpsd;
+  return law == Law::LinearEpsd || law == Law::HertzEpsd || law == Law::MepaEpsd || is_sds(law);
 }
-bool is_sds(const Law law) { return law == Law::HertzSds; }
-bool is_linear(const Law law) { return law == Law::Linear || law == Law::LinearEpsd; }
-bool is_mepa(const Law law) { return law == Law::Mepa || law == Law::MepaEpsd; }
+bool is_linear(const Law law) { return law == Law::Linear || law == Law::LinearEpsd || law == Law::LinearSds; }
+bool is_mepa(const Law law) { return law == Law::Mepa || law == Law::MepaEpsd || law == Law::MepaSds; }
 const char* name_of(const Law law) {
   switch (law) {
     case Law::Linear: return "linear";
     case Law::LinearEpsd: return "linear + EPSD";
+    case Law::LinearSds: return "linear + SDS";
     case Law::Hertz: return "Hertz-Mindlin";
     case Law::HertzEpsd: return "Hertz-Mindlin + EPSD";
     case Law::HertzSds: return "Hertz-Mindlin + SDS";
     case Law::Mepa: return "MEPA";
     case Law::MepaEpsd: return "MEPA + EPSD";
+    case Law::MepaSds: return "MEPA + SDS";
   }
   return "";
 }
@@ -76,6 +78,7 @@ Layout layout_of(const Law law) {
   switch (law) {
     case Law::Linear: return {sizeof(LinearLaneHistory), 0, kNone, kNone};
     case Law::LinearEpsd: return {sizeof(LinearEpsdLaneHistory), 0, kNone, offsetof(LinearEpsdLaneHistory, mk)};
+    case Law::LinearSds: return {sizeof(LinearSdsLaneHistory), 0, kNone, offsetof(LinearSdsLaneHistory, fk)};
     case Law::Hertz: return {sizeof(HertzLaneHistory), 0, offsetof(HertzLaneHistory, kt_prev), kNone};
     case Law::HertzEpsd:
       return {sizeof(HertzEpsdLaneHistory), 0, offsetof(HertzEpsdLaneHistory, kt_prev), offsetof(HertzEpsdLaneHistory, mk)};
@@ -85,6 +88,9 @@ Layout layout_of(const Law law) {
     case Law::MepaEpsd:
       return {sizeof(MepaEpsdLaneHistory), offsetof(MepaEpsdLaneHistory, fs), offsetof(MepaEpsdLaneHistory, kt_prev),
               offsetof(MepaEpsdLaneHistory, mk)};
+    case Law::MepaSds:
+      return {sizeof(MepaSdsLaneHistory), offsetof(MepaSdsLaneHistory, fs), offsetof(MepaSdsLaneHistory, kt_prev),
+              offsetof(MepaSdsLaneHistory, fk)};
   }
   return {};
 }
@@ -97,30 +103,36 @@ std::unique_ptr<System> make_bed(Law law, int threads) {
   const char* const rolling = is_sds(law) ? "sds" : rolls(law) ? "epsd" : "none";
   if (is_linear(law)) {
     s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "linear", rolling,
-                    law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}}), 1e-5, {0, 0, -200.0}, 3e-4);
+                    law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 600}}), 1e-5,
+                    {0, 0, -200.0}, 3e-4);
     // a-a: the defaults (kt = 2/7 kn), no rolling damping; a-b: kt given, limit_damping,
     // tangential and rolling damping; b-b: another restitution and friction, tangential and
-    // rolling damping.
-    const ParamSet aa = law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}});
+    // rolling damping. SDS: springs about the tangential ones' stiffness, dashpots a fifth to
+    // half of critical for a particle's mass (about 1e-5 kg).
+    const ParamSet aa = law_params(law, {{"kn", 2e3}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 600}});
     const ParamSet ab = law_params(law, {{"kn", 3e3}, {"e", 0.2}, {"mu", 0.3}, {"kt", 1.1e3}, {"limit_damping", 1},
-                                         {"damp_t", 0.5}, {"mu_r", 0.05}, {"eta_r", 0.3}});
-    const ParamSet bb =
-        law_params(law, {{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+                                         {"damp_t", 0.5}, {"mu_r", 0.05}, {"eta_r", 0.3}, {"k_r", 300},
+                                         {"gamma_r", 0.01}});
+    const ParamSet bb = law_params(law, {{"kn", 1e3}, {"e", 0.9}, {"mu", 0.8}, {"damp_t", 1.0}, {"mu_r", 0.2},
+                                         {"eta_r", 1.0}, {"k_r", 900}, {"gamma_r", 0.03}});
     s->set_model(make_contact_model("linear", rolling), {aa, ab, ab, bb});
   } else if (is_mepa(law)) {
     s = make_system({{"a", 2500, 0, 0}, {"b", 1500, 0, 0}}, "mepa", rolling,
-                    law_params(law, {{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}}), 5e-6, {0, 0, -200.0}, 3e-4);
+                    law_params(law, {{"k1", 1e5}, {"k2", 5e5}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 2e4}}), 5e-6,
+                    {0, 0, -200.0}, 3e-4);
     // a-a: n = 3/2, adhesion, the tangent kt (kt_form 0), no rolling damping; a-b: n = 1,
     // the cohesion-offset Coulomb base, limit_damping, the secant kt (kt_form 1), rolling
-    // damping; b-b: n = 3/2, a given kt, tangential and rolling damping.
-    const ParamSet aa =
-        law_params(law, {{"k1", 1e5}, {"k2", 5e5}, {"kadh", 2e4}, {"gamma_n", 0.02}, {"mu", 0.5}, {"mu_r", 0.1}});
+    // damping; b-b: n = 3/2, a given kt, tangential and rolling damping. SDS: springs and
+    // dashpots of the tangential ones' order.
+    const ParamSet aa = law_params(
+        law, {{"k1", 1e5}, {"k2", 5e5}, {"kadh", 2e4}, {"gamma_n", 0.02}, {"mu", 0.5}, {"mu_r", 0.1}, {"k_r", 2e4}});
     const ParamSet ab =
         law_params(law, {{"k1", 2e3}, {"k2", 6e3}, {"kadh", 500}, {"n", 1}, {"coulomb_offset", 1}, {"gamma_n", 0.01},
-                         {"limit_damping", 1}, {"kt_form", 1}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}});
+                         {"limit_damping", 1}, {"kt_form", 1}, {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3},
+                         {"k_r", 500}, {"gamma_r", 0.01}});
     const ParamSet bb =
         law_params(law, {{"k1", 5e4}, {"k2", 4e5}, {"kadh", 1e4}, {"gamma_n", 0.03}, {"kt", 800}, {"damp_t", 0.5},
-                         {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}});
+                         {"mu", 0.8}, {"mu_r", 0.2}, {"eta_r", 1.0}, {"k_r", 800}, {"gamma_r", 0.02}});
     s->set_model(make_contact_model("mepa", rolling), {aa, ab, ab, bb});
   } else {
     s = make_system({{"a", 2500, 1e7, 0.25}, {"b", 1500, 5e6, 0.35}}, "hertz_mindlin", rolling,
@@ -224,11 +236,13 @@ bool on_lanes_of(const Law law, const System& s) {
   switch (law) {
     case Law::Linear: return on_lanes<LinearLaw>(s);
     case Law::LinearEpsd: return on_lanes<LinearEpsdLaw>(s);
+    case Law::LinearSds: return on_lanes<LinearSdsLaw>(s);
     case Law::Hertz: return on_lanes<HertzLaw>(s);
     case Law::HertzEpsd: return on_lanes<HertzEpsdLaw>(s);
     case Law::HertzSds: return on_lanes<HertzSdsLaw>(s);
     case Law::Mepa: return on_lanes<MepaLaw>(s);
     case Law::MepaEpsd: return on_lanes<MepaEpsdLaw>(s);
+    case Law::MepaSds: return on_lanes<MepaSdsLaw>(s);
   }
   return false;
 }
@@ -405,11 +419,13 @@ void whole_runs(Law law, bool wide) {
   }
 COHDEM_LANES_TESTS(LinearLaw, Law::Linear)
 COHDEM_LANES_TESTS(LinearEpsd, Law::LinearEpsd)
+COHDEM_LANES_TESTS(LinearSds, Law::LinearSds)
 COHDEM_LANES_TESTS(HertzMindlin, Law::Hertz)
 COHDEM_LANES_TESTS(HertzMindlinEpsd, Law::HertzEpsd)
 COHDEM_LANES_TESTS(HertzMindlinSds, Law::HertzSds)
 COHDEM_LANES_TESTS(Mepa, Law::Mepa)
 COHDEM_LANES_TESTS(MepaEpsd, Law::MepaEpsd)
+COHDEM_LANES_TESTS(MepaSds, Law::MepaSds)
 #undef COHDEM_LANES_TESTS
 
 TEST(Lanes, MepaSettingsOutsideTheLanesRunTheScalarLaw) {
