@@ -13,7 +13,7 @@
 #include "models/normal/linear.hpp"
 #include "models/normal/mepa.hpp"
 #include "models/normal/walton.hpp"
-#include "models/registry_sds.hpp"
+#include "models/registry_laws.hpp"
 #include "models/rolling/rolling.hpp"
 #include "models/tangential/spring.hpp"
 #include "models/twisting/twisting.hpp"
@@ -50,16 +50,9 @@ Factory with_rolling(const std::string& name) {
 
 const std::map<std::string, Factory>& table() {
   static const std::map<std::string, Factory> t = {
-      // name            normal        damping                   tangential
-      {"linear", with_rolling<LinearNormal, LinearRestitutionDamping, LinearTangential>("linear")},
-      {"hertz_mindlin", with_rolling<HertzNormal, TsujiDamping, MindlinTangential>("hertz_mindlin")},
-      // Adhesive and elasto-plastic laws (docs/contact-models.md; each header says why
-      // its damping and tangential partners were chosen).
-      {"mepa", with_rolling<MepaNormal, ViscousDamping, HystTangential<MepaNormal>>("mepa")},
-      {"luding", with_rolling<LudingNormal, ViscousDamping, HystTangential<LudingNormal>>("luding")},
-      {"eepa", with_rolling<EepaNormal, RatioDamping, HystTangential<EepaNormal>>("eepa")},
-      {"jkr", with_rolling<JkrNormal, TsujiDamping, MindlinTangential>("jkr")},
-      {"dmt", with_rolling<DmtNormal, TsujiDamping, MindlinTangential>("dmt")},
+#define COHDEM_TABLE_ROW(name, N, D, T) {name, with_rolling<N, D, T>(name)},
+      COHDEM_ROLLING_LAWS(COHDEM_TABLE_ROW)
+#undef COHDEM_TABLE_ROW
       // Walton: bending in the rolling slot, twisting in the twisting slot.
       {"walton", fixed_rolling<WaltonNormal, RatioDamping, WaltonTangential, WaltonBending, WaltonTwisting>("walton")},
   };

@@ -1,7 +1,8 @@
 // The contact-model registry: a preset name ("linear", "hertz_mindlin", "mepa", ...) and a
 // rolling choice ("none", "epsd", "cdt", "sds") select one compiled ContactLaw. The choice is made
 // once per run, never per pair. To add a model: write its sub-model header(s), then add one
-// row to the table in registry.cpp.
+// row to COHDEM_ROLLING_LAWS (registry_laws.hpp), or to registry.cpp's table for a law whose
+// rolling slot is its own (Walton).
 #pragma once
 #include <memory>
 #include <string>

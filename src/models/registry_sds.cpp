@@ -1,5 +1,5 @@
-// The laws of registry.cpp's table with SDS rolling resistance (registry_sds.hpp).
-#include "models/registry_sds.hpp"
+// The presets of COHDEM_ROLLING_LAWS with SDS rolling resistance (registry_laws.hpp).
+#include "models/registry_laws.hpp"
 
 #include "models/damping/ratio.hpp"
 #include "models/damping/restitution.hpp"
@@ -20,13 +20,9 @@ std::unique_ptr<ContactModel> make_sds_law(const std::string& name) {
   return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, SdsRolling, W>>>(name);
 }
 
-// One line per law of the table (a law missing here fails at the link).
-template std::unique_ptr<ContactModel> make_sds_law<LinearNormal, LinearRestitutionDamping, LinearTangential, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<HertzNormal, TsujiDamping, MindlinTangential, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<MepaNormal, ViscousDamping, HystTangential<MepaNormal>, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<LudingNormal, ViscousDamping, HystTangential<LudingNormal>, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<EepaNormal, RatioDamping, HystTangential<EepaNormal>, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<JkrNormal, TsujiDamping, MindlinTangential, NoTwisting>(const std::string&);
-template std::unique_ptr<ContactModel> make_sds_law<DmtNormal, TsujiDamping, MindlinTangential, NoTwisting>(const std::string&);
+#define COHDEM_SDS_LAW(name, N, D, T) \
+  template std::unique_ptr<ContactModel> make_sds_law<N, D, T, NoTwisting>(const std::string&);
+COHDEM_ROLLING_LAWS(COHDEM_SDS_LAW)
+#undef COHDEM_SDS_LAW
 
 }  // namespace cohdem

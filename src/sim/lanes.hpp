@@ -130,18 +130,15 @@ struct alignas(32) LaneParamsOf {
 };
 
 /// The laws' histories as the lanes read them (same_layout below checks them against
-/// ContactLaw::State): the tangential spring, its last stiffness where it can fall, EPSD's
-/// spring (mk) or SDS's (fk, the same place); MEPA's largest and plastic overlaps and branch
-/// first.
+/// ContactLaw::State): the tangential spring, its last stiffness where it can fall, the
+/// rolling spring (mk: EPSD's moment, or SDS's force, State's rolling.fk, in the same place);
+/// MEPA's largest and plastic overlaps and branch first.
 struct LinearLaneHistory { Vec3 fs; };
-struct LinearEpsdLaneHistory { Vec3 fs; Vec3 mk; };
-struct LinearSdsLaneHistory { Vec3 fs; Vec3 fk; };
+struct LinearRollingLaneHistory { Vec3 fs; Vec3 mk; };
 struct HertzLaneHistory { Vec3 fs; double kt_prev; };
-struct HertzEpsdLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
-struct HertzSdsLaneHistory { Vec3 fs; double kt_prev; Vec3 fk; };  ///< fk: SDS's spring force
+struct HertzRollingLaneHistory { Vec3 fs; double kt_prev; Vec3 mk; };
 struct MepaLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; };
-struct MepaEpsdLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
-struct MepaSdsLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 fk; };
+struct MepaRollingLaneHistory { double Dmax, Dp; int32_t branch; Vec3 fs; double kt_prev; Vec3 mk; };
 
 /// What the lanes read: the particles' arrays, the list's partner index, the material pairs'
 /// parameters (nmat x nmat, row = species of i, LaneParamsOf the law's lane-parameter type) and the
@@ -180,8 +177,9 @@ using LaneEval = void (*)(const LaneInput& in, const ScreenHits& hits, uint32_t 
 /// The entry points, one list for both widths: X(law, suffix, rolling, width) for each law
 /// with lanes, naming law##suffix##_lanes_##width (linear_lanes_avx2, mepa_epsd_lanes_avx512,
 /// ...); lanes_body.hpp defines them from the law's group (law##_group) with the rolling
-/// resistance `rolling` (kLaneNoRolling, kLaneEpsd, kLaneSds). The eight-lane ones (lanes_avx512.cpp, AVX-512 registers, the same results bit for bit): call
-/// them only when screen_avx512_enabled().
+/// resistance `rolling` (kLaneNoRolling, kLaneEpsd, kLaneSds). The eight-lane ones
+/// (lanes_avx512.cpp, AVX-512 registers, the same results bit for bit): call them only when
+/// screen_avx512_enabled().
 inline constexpr int kLaneNoRolling = 0, kLaneEpsd = 1, kLaneSds = 2;
 #define COHDEM_LANE_ENTRIES(X, width)                                                                     \
   X(linear, , kLaneNoRolling, width) X(linear, _epsd, kLaneEpsd, width) X(linear, _sds, kLaneSds, width)   \
@@ -244,7 +242,7 @@ constexpr bool same_layout() {
   using S = typename Law::State;
   constexpr bool kt = requires(S x) { x.tangential.kt_prev; }, mk = requires(S x) { x.rolling.mk; },
                  fk = requires(S x) { x.rolling.fk; }, mepa = requires(S x) { x.normal.Dmax; };
-  if (kt != requires(LH h) { h.kt_prev; } || mk != requires(LH h) { h.mk; } || fk != requires(LH h) { h.fk; } ||
+  if (kt != requires(LH h) { h.kt_prev; } || (mk || fk) != requires(LH h) { h.mk; } ||
       mepa != requires(LH h) { h.Dmax; })
     return false;
   S s{};
@@ -261,15 +259,15 @@ constexpr bool same_layout() {
   bool ok = h.fs == Vec3{1, 2, 3};
   if constexpr (kt) ok = ok && h.kt_prev == 4;
   if constexpr (mk) ok = ok && h.mk == Vec3{5, 6, 7};
-  if constexpr (fk) ok = ok && h.fk == Vec3{5, 6, 7};
+  if constexpr (fk) ok = ok && h.mk == Vec3{5, 6, 7};
   if constexpr (mepa) ok = ok && h.Dmax == 8 && h.Dp == 9 && h.branch == 2;
   return ok;
 }
-static_assert(same_layout<LinearLaneHistory, LinearLaw>() && same_layout<LinearEpsdLaneHistory, LinearEpsdLaw>() &&
-                  same_layout<LinearSdsLaneHistory, LinearSdsLaw>() && same_layout<MepaSdsLaneHistory, MepaSdsLaw>() &&
-                  same_layout<HertzLaneHistory, HertzLaw>() && same_layout<HertzEpsdLaneHistory, HertzEpsdLaw>() &&
-                  same_layout<HertzSdsLaneHistory, HertzSdsLaw>() &&
-                  same_layout<MepaLaneHistory, MepaLaw>() && same_layout<MepaEpsdLaneHistory, MepaEpsdLaw>(),
+static_assert(same_layout<LinearLaneHistory, LinearLaw>() && same_layout<LinearRollingLaneHistory, LinearEpsdLaw>() &&
+                  same_layout<LinearRollingLaneHistory, LinearSdsLaw>() && same_layout<MepaRollingLaneHistory, MepaSdsLaw>() &&
+                  same_layout<HertzLaneHistory, HertzLaw>() && same_layout<HertzRollingLaneHistory, HertzEpsdLaw>() &&
+                  same_layout<HertzRollingLaneHistory, HertzSdsLaw>() &&
+                  same_layout<MepaLaneHistory, MepaLaw>() && same_layout<MepaRollingLaneHistory, MepaEpsdLaw>(),
               "the lanes' histories must be the laws' State, byte for byte");
 
 }  // namespace cohdem

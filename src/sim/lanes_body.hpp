@@ -269,11 +269,6 @@ LANES_FN L3 sds4(const Group& G, L3& fk, const V fc, const V k_r, const V gamma_
   return cross3(G.n, f) * G.rstar;
 }
 
-/// A law's lane history with the rolling resistance kRoll (kLaneNoRolling, kLaneEpsd,
-/// kLaneSds): SDS's spring force sits where EPSD's moment does.
-template <int kRoll, class None, class Epsd, class Sds>
-using RollingHistory =
-    std::conditional_t<kRoll == kLaneSds, Sds, std::conditional_t<kRoll == kLaneEpsd, Epsd, None>>;
 /// The rolling moment on i of a group with EPSD (c: epsd_coef4) or SDS, the spring mk (EPSD's
 /// moment, SDS's force) already turned into the new tangent plane; LP: the law's lane
 /// parameters, read through par.
@@ -345,25 +340,18 @@ LANES_FN void store_records(const Group& G, H* h, const At<T>&... parts) {
 // The records' layouts that the loads and stores below assume by their offsets (lanes.hpp's
 // same_layout checks the records against the laws' State).
 static_assert(sizeof(LinearLaneHistory) == 24 && offsetof(LinearLaneHistory, fs) == 0);
-static_assert(sizeof(LinearEpsdLaneHistory) == 48 && offsetof(LinearEpsdLaneHistory, fs) == 0 &&
-              offsetof(LinearEpsdLaneHistory, mk) == 24);
-static_assert(sizeof(LinearSdsLaneHistory) == 48 && offsetof(LinearSdsLaneHistory, fs) == 0 &&
-              offsetof(LinearSdsLaneHistory, fk) == 24);
+static_assert(sizeof(LinearRollingLaneHistory) == 48 && offsetof(LinearRollingLaneHistory, fs) == 0 &&
+              offsetof(LinearRollingLaneHistory, mk) == 24);
 static_assert(sizeof(HertzLaneHistory) == 32 && offsetof(HertzLaneHistory, fs) == 0 &&
               offsetof(HertzLaneHistory, kt_prev) == 24);
-static_assert(sizeof(HertzEpsdLaneHistory) == 56 && offsetof(HertzEpsdLaneHistory, fs) == 0 &&
-              offsetof(HertzEpsdLaneHistory, kt_prev) == 24 && offsetof(HertzEpsdLaneHistory, mk) == 32);
-static_assert(sizeof(HertzSdsLaneHistory) == 56 && offsetof(HertzSdsLaneHistory, fs) == 0 &&
-              offsetof(HertzSdsLaneHistory, kt_prev) == 24 && offsetof(HertzSdsLaneHistory, fk) == 32);
+static_assert(sizeof(HertzRollingLaneHistory) == 56 && offsetof(HertzRollingLaneHistory, fs) == 0 &&
+              offsetof(HertzRollingLaneHistory, kt_prev) == 24 && offsetof(HertzRollingLaneHistory, mk) == 32);
 static_assert(sizeof(MepaLaneHistory) == 56 && offsetof(MepaLaneHistory, Dp) == 8 &&
               offsetof(MepaLaneHistory, branch) == 16 && offsetof(MepaLaneHistory, fs) == 24 &&
               offsetof(MepaLaneHistory, kt_prev) == 48);
-static_assert(sizeof(MepaEpsdLaneHistory) == 80 && offsetof(MepaEpsdLaneHistory, Dp) == 8 &&
-              offsetof(MepaEpsdLaneHistory, branch) == 16 && offsetof(MepaEpsdLaneHistory, fs) == 24 &&
-              offsetof(MepaEpsdLaneHistory, kt_prev) == 48 && offsetof(MepaEpsdLaneHistory, mk) == 56);
-static_assert(sizeof(MepaSdsLaneHistory) == 80 && offsetof(MepaSdsLaneHistory, Dp) == 8 &&
-              offsetof(MepaSdsLaneHistory, branch) == 16 && offsetof(MepaSdsLaneHistory, fs) == 24 &&
-              offsetof(MepaSdsLaneHistory, kt_prev) == 48 && offsetof(MepaSdsLaneHistory, fk) == 56);
+static_assert(sizeof(MepaRollingLaneHistory) == 80 && offsetof(MepaRollingLaneHistory, Dp) == 8 &&
+              offsetof(MepaRollingLaneHistory, branch) == 16 && offsetof(MepaRollingLaneHistory, fs) == 24 &&
+              offsetof(MepaRollingLaneHistory, kt_prev) == 48 && offsetof(MepaRollingLaneHistory, mk) == 56);
 
 /// One group of contacts of the linear law (after their geometry); kU: one material pair;
 /// kRoll: its rolling resistance (kLaneNoRolling, kLaneEpsd, kLaneSds).
@@ -371,7 +359,7 @@ template <bool kU, int kRoll>
 LANES_FN void linear_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
   constexpr bool kRolls = kRoll != kLaneNoRolling;
-  using LH = RollingHistory<kRoll, LinearLaneHistory, LinearEpsdLaneHistory, LinearSdsLaneHistory>;
+  using LH = std::conditional_t<kRolls, LinearRollingLaneHistory, LinearLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = LinearLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -428,7 +416,7 @@ template <bool kU, int kRoll>
 LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
   constexpr bool kRolls = kRoll != kLaneNoRolling;
-  using LH = RollingHistory<kRoll, HertzLaneHistory, HertzEpsdLaneHistory, HertzSdsLaneHistory>;
+  using LH = std::conditional_t<kRolls, HertzRollingLaneHistory, HertzLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = HertzLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -463,7 +451,7 @@ LANES_FN void hertz_group(const LaneInput& in, const Group& G, const uint32_t g,
   if constexpr (kRolls) {
     const L3 mr = rolling4<kRoll, LP>(G, mk, ec, fc, par, dt);
     put(G, g, alive, fn, ft, &mr, a, out);
-    // {kt_prev, mk} (SDS: fk) at 24 (kt_prev written twice, the same value).
+    // {kt_prev, mk} at 24 (kt_prev written twice, the same value).
     store_records(G, H, At<Quads>{0, a0}, At<Quads>{3, quads(kt_prev, mk.x, mk.y, mk.z)});
   } else {
     put(G, g, alive, fn, ft, nullptr, a, out);
@@ -477,7 +465,7 @@ template <bool kU, int kRoll>
 LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, LaneOut& out) {
   const void* const P = in.params;
   constexpr bool kRolls = kRoll != kLaneNoRolling;
-  using LH = RollingHistory<kRoll, MepaLaneHistory, MepaEpsdLaneHistory, MepaSdsLaneHistory>;
+  using LH = std::conditional_t<kRolls, MepaRollingLaneHistory, MepaLaneHistory>;
   auto* const H = static_cast<LH*>(in.hist);
   using LP = MepaLaneParams;
   const Par<kU, LP> par(P, G.p);
@@ -490,9 +478,10 @@ LANES_FN void mepa_group(const LaneInput& in, const Group& G, const uint32_t g, 
   L3 fs{h1.v[0], h1.v[1], h1.v[2]};
   V kt_prev = h1.v[3];
   rotate_into_plane4(fs, G.n);
-  if constexpr (kRoll == kLaneSds) mk = gather3(H, G.k, &LH::fk);
-  if constexpr (kRoll == kLaneEpsd) mk = gather3(H, G.k, &LH::mk);
-  if constexpr (kRolls) rotate_into_plane4(mk, G.n);
+  if constexpr (kRolls) {
+    mk = gather3(H, G.k, &LH::mk);
+    rotate_into_plane4(mk, G.n);
+  }
   V Dmax, Dp;
   load_pairs(H, G.k, 0, Dmax, Dp);
   // HystereticNormal::apply with fixed stiffnesses (lane_usable): D = delta^n with

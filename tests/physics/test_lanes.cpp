@@ -77,20 +77,20 @@ constexpr size_t kNone = ~size_t(0);
 Layout layout_of(const Law law) {
   switch (law) {
     case Law::Linear: return {sizeof(LinearLaneHistory), 0, kNone, kNone};
-    case Law::LinearEpsd: return {sizeof(LinearEpsdLaneHistory), 0, kNone, offsetof(LinearEpsdLaneHistory, mk)};
-    case Law::LinearSds: return {sizeof(LinearSdsLaneHistory), 0, kNone, offsetof(LinearSdsLaneHistory, fk)};
+    case Law::LinearEpsd: return {sizeof(LinearRollingLaneHistory), 0, kNone, offsetof(LinearRollingLaneHistory, mk)};
+    case Law::LinearSds: return {sizeof(LinearRollingLaneHistory), 0, kNone, offsetof(LinearRollingLaneHistory, mk)};
     case Law::Hertz: return {sizeof(HertzLaneHistory), 0, offsetof(HertzLaneHistory, kt_prev), kNone};
     case Law::HertzEpsd:
-      return {sizeof(HertzEpsdLaneHistory), 0, offsetof(HertzEpsdLaneHistory, kt_prev), offsetof(HertzEpsdLaneHistory, mk)};
+      return {sizeof(HertzRollingLaneHistory), 0, offsetof(HertzRollingLaneHistory, kt_prev), offsetof(HertzRollingLaneHistory, mk)};
     case Law::HertzSds:
-      return {sizeof(HertzSdsLaneHistory), 0, offsetof(HertzSdsLaneHistory, kt_prev), offsetof(HertzSdsLaneHistory, fk)};
+      return {sizeof(HertzRollingLaneHistory), 0, offsetof(HertzRollingLaneHistory, kt_prev), offsetof(HertzRollingLaneHistory, mk)};
     case Law::Mepa: return {sizeof(MepaLaneHistory), offsetof(MepaLaneHistory, fs), offsetof(MepaLaneHistory, kt_prev), kNone};
     case Law::MepaEpsd:
-      return {sizeof(MepaEpsdLaneHistory), offsetof(MepaEpsdLaneHistory, fs), offsetof(MepaEpsdLaneHistory, kt_prev),
-              offsetof(MepaEpsdLaneHistory, mk)};
+      return {sizeof(MepaRollingLaneHistory), offsetof(MepaRollingLaneHistory, fs), offsetof(MepaRollingLaneHistory, kt_prev),
+              offsetof(MepaRollingLaneHistory, mk)};
     case Law::MepaSds:
-      return {sizeof(MepaSdsLaneHistory), offsetof(MepaSdsLaneHistory, fs), offsetof(MepaSdsLaneHistory, kt_prev),
-              offsetof(MepaSdsLaneHistory, fk)};
+      return {sizeof(MepaRollingLaneHistory), offsetof(MepaRollingLaneHistory, fs), offsetof(MepaRollingLaneHistory, kt_prev),
+              offsetof(MepaRollingLaneHistory, mk)};
   }
   return {};
 }
