@@ -95,7 +95,11 @@ void System::prepare() {
   const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
   nl.build(particles, walls, cfg.domain, cfg.skin, reach_, resort);
   if (has_pending_) install_pending();
-  compute_forces();
+  // Forces at this instant without advancing the springs: no time passes. At the start they
+  // are zero (as in LAMMPS's setup); in the middle of a run (particles removed, a lid moved,
+  // a copied bed) they already hold this instant's increment, which a second increment would
+  // count twice (History.PrepareInTheMiddleOfARunDoesNotAdvanceTheSprings).
+  compute_forces(0, false, nullptr, true);
   if (thermal) thermal->update(*this, false);
   dirty_ = false;
 }
@@ -188,7 +192,7 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick_h, bool open_next, Drift* second) {
+void System::compute_forces(double kick_h, bool open_next, Drift* second, bool hold_springs) {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
   contacts_recorded_ = record;
@@ -199,7 +203,7 @@ void System::compute_forces(double kick_h, bool open_next, Drift* second) {
     if (a_wall_.size() < nw) a_wall_.resize(nw);
   }
   // Gravity is added by the kernel, after the contact forces of each free particle.
-  ForceContext ctx{particles, nl, walls, cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
+  ForceContext ctx{particles, nl, walls, hold_springs ? 0.0 : cfg.dt, time, pair_, rev_, f_wall_, tw_wall_, c_wall_, cfg.gravity};
   ctx.parallel_min = cfg.parallel_min;
   ctx.kick_h = kick_h;
   if (open_next) {

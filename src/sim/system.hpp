@@ -115,7 +115,8 @@ class System {
   void remove_particles(const std::vector<uint8_t>& remove);
 
   /// Builds lists and evaluates forces at the current state (call once before stepping,
-  /// and after changing particles or walls by hand).
+  /// and after changing particles or walls by hand). The contact springs are not advanced:
+  /// no time passes (a new contact's springs stay zero, an old one's keep this instant's).
   void prepare();
   /// After a checkpoint restart: builds the lists (from `ref`, the state of the last build
   /// before the checkpoint, when given; else from the current positions) and installs the
@@ -220,7 +221,9 @@ class System {
   /// half-kick F h/m, T h/I once its force is complete (ForceContext::kick_h).
   /// second (with open_next; step_pair): the next step too, in the same sweep, its
   /// displacements there.
-  void compute_forces(double kick_h = 0, bool open_next = false, Drift* second = nullptr);
+  /// hold_springs: the contact laws' spring increments get dt = 0 (prepare(): a force
+  /// evaluation at an instant whose increment the springs already hold, or at the start).
+  void compute_forces(double kick_h = 0, bool open_next = false, Drift* second = nullptr, bool hold_springs = false);
   /// step_once in two halves: the walls' motion, the opening half-kick and drift (unless
   /// the force loop did them), the clock, pours and the rebuild decision; then the force
   /// loop with the closing half-kick (and, open_next, the next opening), the thermal model

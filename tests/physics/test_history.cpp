@@ -140,3 +140,93 @@ TEST(History, SurvivesRebuildsAndResorting) {
     EXPECT_EQ(k, 26) << model << ": wiping the history must show at the first forced rebuild";
   }
 }
+
+// A force evaluation without a time step (System::prepare: the start of a run, or a change of
+// the particles or walls in the middle of one) must not advance the springs: their
+// displacement is the integral of the sliding and rolling velocities over time, and no time
+// passes. At the start the springs are therefore zero (the tangential spring's displacement is
+// the integral of v_t over zero time), and a prepare() in the middle of a run is the same
+// instant evaluated again.
+//
+// Sphere B touches the frozen sphere A with overlap delta0 (no normal velocity), slides past
+// it at v0 and spins about an axis in the tangent plane; e = 1 (no dashpot), gamma_r = 0 (no
+// rolling dashpot), mu and mu_r large (the springs stick). `press`: gravity g along -x holds B
+// on A at the overlap m g / kn, so that the contact lasts (kn 10 N/m); otherwise kn 1e4 N/m
+// and delta0 = 1e-5 m.
+namespace {
+
+struct Pair {
+  std::unique_ptr<System> s;
+  double kn, kt, delta0;
+};
+constexpr double kV0 = 0.01, kW0 = 3.0, kDt = 1e-6, kRp = 1e-3;
+
+Pair sliding_pair(bool press) {
+  const double kn = press ? 10.0 : 1e4, g = 9.81, rho = 2500;
+  const double m = rho * 4.0 / 3.0 * M_PI * kRp * kRp * kRp;
+  const double delta0 = press ? m * g / kn : 1e-5;
+  Pair p{make_system({{"glass", rho, 0, 0}}, "linear", "sds",
+                     params({{"kn", kn}, {"e", 1.0}, {"mu", 10.0}, {"k_r", kn / 20}, {"gamma_r", 0.0}, {"mu_r", 10.0}}),
+                     kDt, press ? Vec3{-g, 0, 0} : Vec3{}),
+         kn, 2.0 / 7.0 * kn, delta0};
+  const size_t a = p.s->add_particle(0, kRp, {0.01, 0.01, 0.01}, {}, {});
+  p.s->particles.flag[a] = kFrozen;
+  p.s->add_particle(0, kRp, {0.01 + 2 * kRp - delta0, 0.01, 0.01}, {0, kV0, 0}, {0, 0, kW0});
+  return p;
+}
+
+/// B's contact force minus its weight, split along the current normal (A to B) and across it.
+std::pair<double, Vec3> normal_and_tangential(const System& s) {
+  const size_t a = index_of(s, 0), b = index_of(s, 1);
+  const Vec3 n = normalized(s.particles.x[b] - s.particles.x[a]);
+  const Vec3 f = s.particles.force[b] - s.cfg.gravity * s.particles.mass[b];
+  return {dot(f, n), f - n * dot(f, n)};
+}
+
+}  // namespace
+
+TEST(History, FirstForcesHoldTheSpringsAtZero) {
+  Pair p = sliding_pair(false);
+  System& s = *p.s;
+  s.prepare();
+  const auto [fn, ft] = normal_and_tangential(s);
+  // The normal force alone, kn delta0 = 0.1 N. A spring advanced by one step would add
+  // kt v_t dt = 2.0e-5 N across the normal, and its moment; 1e-12 N is rounding.
+  EXPECT_NEAR(fn, p.kn * p.delta0, 1e-12);
+  EXPECT_LE(norm(ft), 1e-12) << "tangential force before any time has passed";
+  EXPECT_LE(norm(s.particles.torque[index_of(s, 1)]), 1e-15) << "moment before any time has passed";
+  report("history: tangential force at the first evaluation, N", norm(ft), 0, 1e-12);
+
+  // One step later the spring holds one step's sliding, -kt v_t dt along y. B's contact point
+  // moves at v_t = v0 - (r - delta0/2) w0 (the spin about z at cohdem's lever arm; A is
+  // frozen), and no tangential force acted in the first half-step, so the midpoint velocities
+  // are the initial ones. 1e-5 relative: the normal turns by v0 dt / 2r = 5e-6 rad in the step.
+  s.step_once();
+  const double vt = kV0 - (kRp - 0.5 * p.delta0) * kW0;
+  const double ratio = normal_and_tangential(s).second.y / (-p.kt * vt * kDt);
+  EXPECT_NEAR(ratio, 1.0, 1e-5) << "the spring after one step (2 if the first evaluation had advanced it)";
+  report("history: tangential force after one step / (-kt v_t dt)", ratio, 1.0, 1e-5, "rel");
+}
+
+TEST(History, PrepareInTheMiddleOfARunDoesNotAdvanceTheSprings) {
+  auto trace = [](bool again) {
+    Pair p = sliding_pair(true);
+    System& s = *p.s;
+    s.prepare();
+    for (int k = 0; k < 200; ++k) {
+      if (again && k == 100) s.prepare();  // the same instant, evaluated again
+      s.step_once();
+    }
+    return std::pair{normal_and_tangential(s).second, s.particles.torque[index_of(s, 1)]};
+  };
+  const auto [f0, t0] = trace(false);
+  const auto [f1, t1] = trace(true);
+  // After 200 steps the springs hold 200 steps of sliding and rolling: one step's increment
+  // more would be 0.5 % of them. The two runs differ only in the rounding of turning a spring
+  // into the plane it is already in: 1e-9 relative.
+  ASSERT_GT(norm(f0), 0.0);
+  ASSERT_GT(norm(t0), 0.0);
+  EXPECT_LE(norm(f1 - f0), 1e-9 * norm(f0));
+  EXPECT_LE(norm(t1 - t0), 1e-9 * norm(t0));
+  report("history: tangential force, prepare() at step 100 against none (rel)", norm(f1 - f0) / norm(f0), 0, 1e-9);
+}
