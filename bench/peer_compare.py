@@ -21,7 +21,8 @@ For every code and problem: particle-steps per second (atoms x steps / loop time
 its summary.json, which times the step loop only, as LAMMPS's "Loop time" does), median and
 best of the runs, the ratio cohdem/peer, and the physics after the same simulated time:
 translational kinetic energy and mean flow velocity of the free particles (x for the chute,
-z for the packing), and the memory: each run's peak resident memory of the whole process
+z for the packing) within the problem's tolerance, the rotational energy within 1 % (ROT_TOL),
+the gain of translational energy since step 0 (reported only), and the memory: each run's peak resident memory of the whole process
 (the kernel's high-water mark; cohdem's own record of it, which also covers the loading of
 its case) over the particle count, median of the runs (column B/particle), and cohdem's
 time loop alone (summary.json's peak_rss_run_bytes); for the peers on several MPI ranks, the
@@ -98,16 +99,19 @@ def peer_loop(text):
 
 
 def parse_peer(text, nsteps):
-    """LAMMPS/LIGGGHTS screen output -> (particle-steps/s, KE, KE_rot, v_mean)."""
+    """LAMMPS/LIGGGHTS screen output -> (particle-steps/s, KE, KE_rot, v_mean, KE at step 0)."""
     t, steps, atoms = peer_loop(text)
-    row = None
+    row = row0 = None
     for line in text.splitlines():
         f = line.split()
-        if len(f) == 5 and f[0] == str(nsteps) and f[1] == str(atoms):
-            row = f
-    if row is None:
-        raise RuntimeError(f"no thermo row for step {nsteps}")
-    return atoms * steps / t, float(row[2]), float(row[3]), float(row[4])
+        if len(f) == 5 and f[1] == str(atoms):
+            if f[0] == str(nsteps):
+                row = f
+            elif f[0] == "0":
+                row0 = f
+    if row is None or row0 is None:
+        raise RuntimeError(f"no thermo row for step {nsteps} or step 0")
+    return atoms * steps / t, float(row[2]), float(row[3]), float(row[4]), float(row0[2])
 
 
 def find_chute_data():
@@ -121,12 +125,24 @@ def find_chute_data():
 
 PEER_EXE = {"lammps": "lmp", "liggghts": "liggghts"}
 DT = 1e-4  # the time step of every problem (its cohdem case and its peer inputs)
+# The rotational energy after the same time, judged to 1 %: the translational energy of the
+# chute is mostly its initial flow (784,139 of 784,700 after 1000 steps), so its agreement
+# says little about the contact laws, while the rotational energy halves in those steps and
+# follows the tangential, rolling and damping laws. Same physics in the two codes gives
+# 0.1-0.5 % (the linear chute and the packing 0.1 %, Hertz-Mindlin with and without SDS
+# rolling 0.25 % and 0.43 %); a dashpot 1.42 times LAMMPS's (e = 0.9 integrated exactly
+# against LAMMPS's Tsuji fit, docs/contact-models.md) gave 2.6 %.
+ROT_TOL = 0.01
 
 
 class Problem:
-    def __init__(self, name, cohdem_case, vel_axis, lammps, liggghts, physics_tol, note=""):
+    """rot_tol: per peer, the tolerance on the rotational energy (None: reported, not judged,
+    where the peer runs another rolling law)."""
+    def __init__(self, name, cohdem_case, vel_axis, lammps, liggghts, physics_tol, note="",
+                 rot_tol=None):
         self.name, self.cohdem_case, self.vel_axis = name, cohdem_case, vel_axis
         self.lammps, self.liggghts, self.physics_tol, self.note = lammps, liggghts, physics_tol, note
+        self.rot_tol = rot_tol or {"lammps": ROT_TOL, "liggghts": ROT_TOL}
 
     def command(self, code, nsteps, cohdem=None, threads=1, out=None):
         """The command that runs this problem for nsteps in `code`, from the working folder
@@ -183,8 +199,10 @@ def problem_table():
         "chute_hmr": Problem("chute_hmr", "chute_hmr.toml", 0,
                              ["lmp", "-var", "model", "hmr", "-in", "in.chute.granular", "-log", "none"],
                              ["liggghts", "-var", "model", "hmr", "-in", "in.chute.liggghts"], 0.02,
-                             "cohdem and LAMMPS: SDS rolling with the same numbers; LIGGGHTS: its epsd2 rolling "
-                             "law, so its physics agree roughly only"),
+                             "cohdem and LAMMPS: SDS rolling with the same numbers and the same dashpot; "
+                             "LIGGGHTS: its epsd2 rolling law and the exact dashpot for e = 0.9, so its physics "
+                             "agree roughly only (its rotational energy is not judged)",
+                             rot_tol={"lammps": ROT_TOL, "liggghts": None}),
         "packing": Problem("packing", "packing.toml", 2,
                            ["lmp", "-in", "in.packing", "-log", "none"],
                            ["liggghts", "-in", "in.packing.liggghts"], 0.02),
@@ -246,7 +264,7 @@ def main():
                     _, rss = sh(P.command(c, nsteps, a.cohdem, a.threads, out), work, log, cpu)
                     j = cohdem_summary(out, nsteps)
                     r = (j["particle_steps_per_s"], j["translational_energy"], j["rotational_energy"],
-                         j["mean_velocity"][P.vel_axis])
+                         j["mean_velocity"][P.vel_axis], None)
                     atoms = j["particles"]
                     # cohdem resets the kernel's high-water mark once the case is loaded (to
                     # measure its time loop, summary.json's peak_rss_run_bytes), so the
@@ -262,6 +280,8 @@ def main():
                 res[c]["particles"] = atoms
                 res[c].setdefault("cpu", []).append(cpu)
                 res[c]["ke"], res[c]["ke_rot"], res[c]["v"] = r[1], r[2], r[3]
+                if r[4] is not None:
+                    res[c]["ke0"] = r[4]
                 where = f" (core {cpu})" if cpu is not None else ""
                 print(f"  run {run + 1} {c:8s} {r[0]:10.4g} particle-steps/s{where}", flush=True)
         ax = "xyz"[P.vel_axis]
@@ -287,10 +307,20 @@ def main():
                 ratio = f"{R['ratio_median']:.2f}x, {R['ratio_best']:.2f}x, {R['ratio_paired']:.2f}x"
                 dke = abs(c0["ke"] - R["ke"]) / abs(R["ke"])
                 dv = abs(c0["v"] - R["v"]) / max(abs(R["v"]), 1e-12)
-                R["rel_diff_ke"], R["rel_diff_v"] = dke, dv
-                ok = dke <= P.physics_tol and dv <= P.physics_tol
+                drot = abs(c0["ke_rot"] - R["ke_rot"]) / max(abs(R["ke_rot"]), 1e-300)
+                # The change of the translational energy since step 0 (the same initial state in
+                # every code: the peer's own step-0 row), reported only: it is the small
+                # difference of the gravity's work and the dissipation, so a 1 % difference in
+                # the dissipation shows several times larger in it.
+                gain_p = R["ke"] - R["ke0"]
+                dgain = abs((c0["ke"] - R["ke0"]) - gain_p) / max(abs(gain_p), 1e-300)
+                R["rel_diff_ke"], R["rel_diff_v"], R["rel_diff_ke_rot"], R["rel_diff_ke_gain"] = dke, dv, drot, dgain
+                rtol = P.rot_tol[c]
+                ok = dke <= P.physics_tol and dv <= P.physics_tol and (rtol is None or drot <= rtol)
                 R["physics_ok"] = ok
-                phys = f"dKE {dke:.2e}, dv {dv:.2e}: {'ok' if ok else 'DIFFERS'} (tol {P.physics_tol:g})"
+                rot = f"dKE_rot {drot:.2e}" + (f" (tol {rtol:g})" if rtol is not None else " (not judged)")
+                phys = (f"dKE {dke:.2e}, dv {dv:.2e} (tol {P.physics_tol:g}), {rot}: {'ok' if ok else 'DIFFERS'}; "
+                        f"KE gain since step 0 {dgain:.2e}")
             print(f"  {c:9s} {med:10.4g} {best:10.4g}  {ratio:>35s}  {R['bytes_per_particle']:10.0f}  "
                   f"{R['ke']:12.7g} {R['ke_rot']:10.5g} {R['v']:10.6g}  {phys}")
         print(f"  memory: peak resident memory of the whole process over the particle count (cohdem's "

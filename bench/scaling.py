@@ -162,7 +162,7 @@ def main():
         cpu = cores[r % len(cores)] if cores else None
         text, rss = pc.sh(["lmp", "-var", "nsteps", str(a.steps), "-var", "data", os.path.abspath(os.path.join(a.out, f"{key}.data")),
                            "-in", "in.packing", "-log", "none"], lmp_dir, os.path.join(lmp_dir, f"{key}.{r + 1}.log"), cpu)
-        rate, ke, ke_rot, vz = pc.parse_peer(text, a.steps)
+        rate, ke, ke_rot, vz, _ = pc.parse_peer(text, a.steps)
         ours = allr[(key, f"core{cpu}") if cpu is not None else (key, 1)][-1]
         lmp.setdefault(key, []).append({"rate": rate, "cohdem_rate": ours, "cpu": cpu, "peak_rss_bytes": rss,
                                         "particles": pc.peer_loop(text)[2], "ke": ke, "ke_rot": ke_rot, "vz": vz})
