@@ -77,6 +77,8 @@ void print_audit(const TimestepAudit& a) {
   if (a.collision > 0 && std::isfinite(a.collision))
     spdlog::info("collision time {:.4g} s ({} at {:.3g} m/s): {:.1f} steps per collision", a.collision, a.collision_pair,
                  a.velocity, a.collision / a.dt);
+  if (a.rolling > 0 && std::isfinite(a.rolling))
+    spdlog::info("rolling spring half period {:.4g} s ({}): {:.1f} steps", a.rolling, a.rolling_pair, a.rolling / a.dt);
   for (const auto& m : a.messages) {
     if (a.level == TimestepAudit::Error) spdlog::error("time step: {}", m);
     else spdlog::warn("time step: {}", m);
@@ -526,6 +528,7 @@ int run_case(Case c, const RunOptions& opt) {
   j["frames"] = frame;
   j["timestep_audit"] = {{"rayleigh_time", audit.rayleigh}, {"collision_time", audit.collision},
                          {"audit_velocity", audit.velocity}};
+  if (audit.rolling > 0 && std::isfinite(audit.rolling)) j["timestep_audit"]["rolling_half_period"] = audit.rolling;
   for (const Wall& w : s.walls)
     j["walls"][w.name] = {{"force", {w.force.x, w.force.y, w.force.z}}, {"torque", {w.torque.x, w.torque.y, w.torque.z}}};
   if (s.thermal) {
@@ -600,9 +603,12 @@ int check_case(const Case& c) {
   if (a.collision > 0 && std::isfinite(a.collision))
     fmt::print("collision time: {:.4g} s ({} at {:.3g} m/s), {:.1f} steps per collision\n", a.collision, a.collision_pair,
                a.velocity, a.collision / a.dt);
+  if (a.rolling > 0 && std::isfinite(a.rolling))
+    fmt::print("rolling spring half period: {:.4g} s ({}), {:.1f} steps\n", a.rolling, a.rolling_pair, a.rolling / a.dt);
   double crit = INFINITY;
   if (a.rayleigh > 0) crit = std::min(crit, kWarnRayleigh * a.rayleigh);
   if (a.collision > 0 && std::isfinite(a.collision)) crit = std::min(crit, a.collision / kWarnStepsPerCollision);
+  if (a.rolling > 0 && std::isfinite(a.rolling)) crit = std::min(crit, a.rolling / kWarnStepsPerCollision);
   if (std::isfinite(crit)) fmt::print("critical time step (safe): {:.4g} s\n", crit);
   // Memory of a one-thread run's time loop (its peak, as summary.json's peak_rss_run_bytes
   // measures it; with [[particle]] tables the parse of the case file can peak higher, about

@@ -8,9 +8,14 @@ namespace cohdem {
 
 namespace {
 
-/// Collision time of one pair (i, j) with radii ri, rj (rj = 0: wall) and masses.
-double collision_time(const ContactModel& m, int i, int j, double ri, double rj, double mi, double mj,
-                      double v) {
+struct PairTimes {
+  double collision = INFINITY;
+  double rolling = INFINITY;  ///< half period of the rolling (bending) spring; inf: none
+};
+
+/// Collision time of one pair (i, j) with radii ri, rj (rj = 0: wall) and masses, and the
+/// half period of its rolling spring at the overlap of that collision.
+PairTimes pair_times(const ContactModel& m, int i, int j, double ri, double rj, double mi, double mj, double v) {
   PairGeom g;
   g.n = {0, 0, 1};
   g.ri = ri;
@@ -58,7 +63,32 @@ double collision_time(const ContactModel& m, int i, int j, double ri, double rj,
   double f, kl, ku;
   load_to(std::min(hi, g.rstar), 400, &f, &kl, &ku);
   const double k = std::max(kl, ku);
-  return k > 0 ? M_PI * std::sqrt(g.mstar / k) : INFINITY;
+  PairTimes t;
+  t.collision = k > 0 ? M_PI * std::sqrt(g.mstar / k) : INFINITY;
+
+  // The rolling spring at that overlap (rolling's own stiffness, such as SDS's k_r or Walton's
+  // bending k_theta, need not follow kn): a relative rotation rate u about an axis in the
+  // tangent plane for one step of length h, from the loaded state, for h = 0 and h = h1. The
+  // moments differ by the spring's k_rot u h1 (the dashpots' parts cancel); u is small
+  // enough that no limit is reached. Half period pi sqrt(I_eff / k_rot), I_eff = Ii Ij /
+  // (Ii + Ij), the relative rotation's inertia (Ii for a wall).
+  const std::vector<std::byte> loaded = st;
+  PairGeom p = g;
+  p.vn = 0;
+  p.vt = {};
+  const double u = 1e-9, h1 = 1e-6;
+  p.wrel = {u, 0, 0};
+  Vec3 mr[2];
+  for (int q = 0; q < 2; ++q) {
+    st = loaded;
+    p.dt = q ? h1 : 0.0;
+    PairForce out;
+    mr[q] = m.evaluate(i, j, p, st.data(), out) ? out.mr : Vec3{};
+  }
+  const double k_rot = norm(mr[1] - mr[0]) / (u * h1);
+  const double I_eff = std::isfinite(g.Ij) ? g.Ii * g.Ij / (g.Ii + g.Ij) : g.Ii;
+  if (k_rot > 0) t.rolling = M_PI * std::sqrt(I_eff / k_rot);
+  return t;
 }
 
 }  // namespace
@@ -84,19 +114,17 @@ TimestepAudit audit_timestep(const System& s, const std::vector<double>& rmin, d
     if (!(rmin[i] > 0)) continue;
     const double mi = s.materials[i].density * 4.0 / 3.0 * M_PI * std::pow(rmin[i], 3);
     for (int j = 0; j < n; ++j) {
-      std::string label;
-      double tc = INFINITY;
+      auto note = [&](const PairTimes& t, const std::string& label) {
+        if (t.collision < (a.collision > 0 ? a.collision : INFINITY)) { a.collision = t.collision; a.collision_pair = label; }
+        if (t.rolling < (a.rolling > 0 ? a.rolling : INFINITY)) { a.rolling = t.rolling; a.rolling_pair = label; }
+      };
       if (rmin[j] > 0 && j >= i) {
         const double mj = s.materials[j].density * 4.0 / 3.0 * M_PI * std::pow(rmin[j], 3);
-        tc = collision_time(*s.model, i, j, rmin[i], rmin[j], mi, mj, v);
-        label = s.materials[i].name + "-" + s.materials[j].name;
-        if (tc < (a.collision > 0 ? a.collision : INFINITY)) { a.collision = tc; a.collision_pair = label; }
+        note(pair_times(*s.model, i, j, rmin[i], rmin[j], mi, mj, v), s.materials[i].name + "-" + s.materials[j].name);
       }
-      if (wall_mat[j]) {
-        tc = collision_time(*s.model, i, j, rmin[i], 0, mi, INFINITY, v);
-        label = s.materials[i].name + "-wall(" + s.materials[j].name + ")";
-        if (tc < (a.collision > 0 ? a.collision : INFINITY)) { a.collision = tc; a.collision_pair = label; }
-      }
+      if (wall_mat[j])
+        note(pair_times(*s.model, i, j, rmin[i], 0, mi, INFINITY, v),
+             s.materials[i].name + "-wall(" + s.materials[j].name + ")");
     }
   }
   auto raise = [&](TimestepAudit::Level l, const std::string& msg) {
@@ -114,6 +142,13 @@ TimestepAudit audit_timestep(const System& s, const std::vector<double>& rmin, d
     const double steps = a.collision / a.dt;
     std::snprintf(buf, sizeof buf, "%.1f steps per collision (t_c = %.3g s for %s at %.3g m/s)", steps, a.collision,
                   a.collision_pair.c_str(), v);
+    if (steps < kErrorStepsPerCollision) raise(TimestepAudit::Error, std::string(buf) + ": below the hard bound of 8");
+    else if (steps < kWarnStepsPerCollision) raise(TimestepAudit::Warn, std::string(buf) + ": below the safe 20");
+  }
+  if (a.rolling > 0 && std::isfinite(a.rolling)) {
+    const double steps = a.rolling / a.dt;
+    std::snprintf(buf, sizeof buf, "%.1f steps per half period of the rolling spring (%.3g s for %s)", steps, a.rolling,
+                  a.rolling_pair.c_str());
     if (steps < kErrorStepsPerCollision) raise(TimestepAudit::Error, std::string(buf) + ": below the hard bound of 8");
     else if (steps < kWarnStepsPerCollision) raise(TimestepAudit::Warn, std::string(buf) + ": below the safe 20");
   }

@@ -8,8 +8,15 @@
 //   of the loading tangent and the unloading slope there gives t_c = pi sqrt(m*/k). For
 //   Hertz this is 22% shorter than Hertz's exact duration (conservative); for plastic laws it
 //   sees the stiff unloading branch.
-// Levels: warn when dt > 0.2 T_R or dt > t_c/20 (fewer than 20 steps per collision);
-//   error when dt > 0.5 T_R or dt > t_c/8.
+// Rolling time: the half period pi sqrt(I_eff/k_rot) of the rolling (or bending) spring of
+//   the same pair at the overlap of that collision, k_rot its moment per radian of relative
+//   rotation (probed through the law: SDS's k_r R*^2, EPSD's k_r, Walton's k_theta) and
+//   I_eff = I_i I_j/(I_i + I_j) (I_i against a wall). SDS's k_r and Walton's bending
+//   stiffness are the user's, not tied to kn, so a stiff one can need a shorter step than
+//   the collision; EPSD's is slower than the collision unless mu_r > 0.84.
+// Levels: warn when dt > 0.2 T_R or dt > t_c/20 (fewer than 20 steps per collision) or
+//   fewer than 20 steps per half period of the rolling spring; error when dt > 0.5 T_R or
+//   dt > t_c/8 or fewer than 8 steps per rolling half period.
 #pragma once
 #include <string>
 #include <vector>
@@ -25,6 +32,8 @@ struct TimestepAudit {
   std::string rayleigh_material;
   double collision = 0;         ///< smallest collision time, s (0: none evaluated)
   std::string collision_pair;
+  double rolling = 0;           ///< smallest half period of a rolling spring, s (0: none)
+  std::string rolling_pair;
   double velocity = 0;          ///< audit velocity, m/s
   Level level = Ok;
   std::vector<std::string> messages;

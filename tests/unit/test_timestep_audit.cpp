@@ -38,3 +38,31 @@ TEST(TimestepAudit, HertzCollisionTimeAndLevels) {
     EXPECT_EQ(a.level, want) << "dt = t_c/" << t_est / dt;
   }
 }
+
+// The rolling spring's half period against its closed form. SDS: a moment k_r R*^2 per radian
+// of relative rotation (the spring acts on the rolling displacement R* theta, its force at
+// the lever R*), on the relative rotation's inertia I_eff = I/2 for two equal spheres, so
+// t_r = pi sqrt(I/(2 k_r R*^2)); k_r chosen for 10 steps (warning) and 5 (error), with the
+// collision well resolved. EPSD with mu_r = 0.3: slower than the collision by 0.84/mu_r, no
+// message. CDT has no spring: no rolling time.
+TEST(TimestepAudit, RollingSpringHalfPeriod) {
+  const double r = 1e-3, rho = 2500, kn = 1e4, dt = 1e-6;
+  const double m = rho * 4.0 / 3.0 * M_PI * r * r * r, I = 0.4 * m * r * r, Rs = r / 2;
+  const double tc = M_PI * std::sqrt(0.5 * m / kn);
+  ASSERT_GT(tc / dt, 20.0);  // the collision alone passes
+  for (double steps : {10.0, 5.0}) {
+    const double t = steps * dt, k_r = M_PI * M_PI * I / (2 * Rs * Rs * t * t);
+    auto s = make_system({{"glass", rho, 0, 0}}, "linear", "sds",
+                         params({{"kn", kn}, {"e", 0.5}, {"mu", 0.5}, {"k_r", k_r}, {"gamma_r", 1e-3}, {"mu_r", 0.1}}), dt);
+    const auto a = audit_timestep(*s, {r}, 1.0);
+    EXPECT_NEAR(a.rolling / t, 1.0, 1e-6) << steps << " steps";
+    EXPECT_EQ(a.level, steps < 8 ? TimestepAudit::Error : TimestepAudit::Warn) << steps << " steps";
+  }
+  auto e = make_system({{"glass", rho, 0, 0}}, "linear", "epsd", params({{"kn", kn}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.3}}), dt);
+  const auto ae = audit_timestep(*e, {r}, 1.0);
+  // EPSD: k_r = 2.25 kn mu_r^2 R*^2, so t_r / t_c = sqrt((I/2) / (2.25 mu_r^2 R*^2 m/2)) = sqrt(0.711)/mu_r.
+  EXPECT_NEAR(ae.rolling / tc, std::sqrt(0.4 / 0.5625) / 0.3, 1e-3);
+  EXPECT_EQ(ae.level, TimestepAudit::Ok);
+  auto c = make_system({{"glass", rho, 0, 0}}, "linear", "cdt", params({{"kn", kn}, {"e", 0.5}, {"mu", 0.5}, {"mu_r", 0.3}}), dt);
+  EXPECT_EQ(audit_timestep(*c, {r}, 1.0).rolling, 0.0);
+}
