@@ -94,7 +94,8 @@ def peers(a, out):
         rows[prob] = {"paired": lmp["ratio_paired"], "median": lmp["ratio_median"], "best": lmp["ratio_best"],
                       "round_by_round": [x / y for x, y in zip(c["cohdem"]["rate"], lmp["rate"])],
                       "cohdem_median": c["cohdem"]["median"], "lammps_median": lmp["median"],
-                      "physics_ok": lmp["physics_ok"], "rel_diff_ke": lmp["rel_diff_ke"], "rel_diff_v": lmp["rel_diff_v"]}
+                      "physics_ok": lmp["physics_ok"], "rel_diff_ke": lmp["rel_diff_ke"], "rel_diff_v": lmp["rel_diff_v"],
+                      "rel_diff_ke_rot": lmp.get("rel_diff_ke_rot")}
     return rows
 
 
@@ -210,7 +211,9 @@ def table(got):
         names = {"chute": "linear chute", "chute_hmr": "Hertz-Mindlin + rolling chute"}
         meas = "; ".join(f"{names[p]} **{r['paired']:.2f}x** paired (round by round "
                          f"{min(r['round_by_round']):.2f}-{max(r['round_by_round']):.2f}x; median {r['median']:.2f}x, "
-                         f"best {r['best']:.2f}x), physics {'ok' if r['physics_ok'] else 'DIFFERS'}"
+                         f"best {r['best']:.2f}x), physics {'ok' if r['physics_ok'] else 'DIFFERS'} (KE "
+                         f"{r['rel_diff_ke']:.1e}, v {r['rel_diff_v']:.1e}"
+                         + (f", KE_rot {r['rel_diff_ke_rot']:.1e}" if r.get('rel_diff_ke_rot') is not None else "") + ")"
                          for p, r in P.items())
         ok = all(r["paired"] >= 2.0 and r["physics_ok"] for r in P.values())
         rows.append(("1 thread >= 2x LAMMPS on both chutes", meas, verdict(ok)))
