@@ -11,7 +11,9 @@ cases read their particles from CSV files, [[particles]], as LAMMPS reads its da
   chute      LAMMPS's chute benchmark, 32,000 spheres, gran/hooke/history (in.chute);
              cohdem: bench/chute.toml; LIGGGHTS: hooke/stiffness + tangential history
   chute_hmr  the same chute with Hertz-Mindlin + rolling resistance (in.chute.granular
-             -var model hmr: hertz/material, mindlin, tsuji, rolling sds); cohdem:
+             -var model hmr: hertz/material, mindlin_rescale/force (bench/peers' default, the
+             Mindlin law cohdem has; the shared input's `mindlin`: -var tangential mindlin),
+             tsuji, rolling sds); cohdem:
              bench/chute_hmr.toml (SDS rolling, LAMMPS's numbers); LIGGGHTS: hertz +
              rolling_friction epsd2 (its own rolling law: its physics agree roughly only)
   packing    a poured packing of 100,000 spheres (bench/gen_packing.py; bench/packing.toml,

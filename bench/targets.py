@@ -211,9 +211,10 @@ def table(got):
         names = {"chute": "linear chute", "chute_hmr": "Hertz-Mindlin + rolling chute"}
         meas = "; ".join(f"{names[p]} **{r['paired']:.2f}x** paired (round by round "
                          f"{min(r['round_by_round']):.2f}-{max(r['round_by_round']):.2f}x; median {r['median']:.2f}x, "
-                         f"best {r['best']:.2f}x), physics {'ok' if r['physics_ok'] else 'DIFFERS'} (KE "
-                         f"{r['rel_diff_ke']:.1e}, v {r['rel_diff_v']:.1e}"
-                         + (f", KE_rot {r['rel_diff_ke_rot']:.1e}" if r.get('rel_diff_ke_rot') is not None else "") + ")"
+                         f"best {r['best']:.2f}x), physics {'ok' if r['physics_ok'] else 'DIFFERS'}"
+                         + (f" (KE {r['rel_diff_ke']:.1e}, v {r['rel_diff_v']:.1e}"
+                            + (f", KE_rot {r['rel_diff_ke_rot']:.1e}" if r.get('rel_diff_ke_rot') is not None else "")
+                            + ")" if "rel_diff_ke" in r else "")
                          for p, r in P.items())
         ok = all(r["paired"] >= 2.0 and r["physics_ok"] for r in P.values())
         rows.append(("1 thread >= 2x LAMMPS on both chutes", meas, verdict(ok)))
