@@ -131,9 +131,10 @@ DT = 1e-4  # the time step of every problem (its cohdem case and its peer inputs
 # chute is mostly its initial flow (784,139 of 784,700 after 1000 steps), so its agreement
 # says little about the contact laws, while the rotational energy halves in those steps and
 # follows the tangential, rolling and damping laws. Same physics in the two codes gives
-# 0.1-0.5 % (the linear chute and the packing 0.1 %, Hertz-Mindlin with and without SDS
-# rolling 0.25 % and 0.43 %); a dashpot 1.42 times LAMMPS's (e = 0.9 integrated exactly
-# against LAMMPS's Tsuji fit, docs/contact-models.md) gave 2.6 %.
+# 0.1-0.25 % (the linear chute 0.22 %, the packing 0.1 %, Hertz-Mindlin with and without SDS
+# rolling 0.25 % and 0.22 %; 0.43 % without rolling against LAMMPS's other Mindlin law,
+# `mindlin`); a dashpot 1.42 times LAMMPS's (e = 0.9 integrated exactly against LAMMPS's Tsuji
+# fit, docs/contact-models.md) gave 2.6 %.
 ROT_TOL = 0.01
 
 
