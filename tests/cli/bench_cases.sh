@@ -153,6 +153,40 @@ ok = r['cpu'] == [cores[k % len(cores)] for k in range(2)] and len(r['rate']) ==
 ok = ok and r['particles'] == 32000 and len(r['peak_rss_bytes']) == 2 and 100 < r['bytes_per_particle'] < 1e5
 ok = ok and 100 < r['run_bytes_per_particle'] <= r['bytes_per_particle']
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py pinning, memory"; else echo "FAIL peer_compare.py"; tail -5 "$work/pc.log"; fail=$((fail+1)); fi
+# peer_compare.py's physics check through a stand-in `lmp` first on the PATH (CI has no
+# LAMMPS): it prints cohdem's own final energies and velocity (read from the round's cohdem
+# summary, written just before) with the rotational energy scaled by COHDEM_STUB_ROT, and a
+# step-0 row. The translational energy and velocity then agree exactly, so the rotational
+# energy alone decides: 0.5 % off passes, 2 % off fails (ROT_TOL, 1 %), and the gain since
+# step 0 is reported.
+mkdir -p "$work/pcstub"
+cat > "$work/pcstub/lmp" <<'PY'
+#!/usr/bin/env python3
+import json, os, sys
+a = sys.argv[1:]
+n = int({a[i + 1]: a[i + 2] for i, x in enumerate(a) if x == "-var"}["nsteps"])
+j = json.load(open(os.path.join("chute.cohdem.out", "summary.json")))
+ke, rot, v = j["translational_energy"], j["rotational_energy"], j["mean_velocity"][0]
+print("   Step   Atoms   KinEng   c_1   v_vx")
+print(f"  0 32000 {ke - 1.0!r} {rot!r} {v!r}")
+print(f"  {n} 32000 {ke!r} {rot * float(os.environ['COHDEM_STUB_ROT'])!r} {v!r}")
+print(f"Loop time of 1.0 on 1 procs for {n} steps with 32000 atoms")
+PY
+chmod +x "$work/pcstub/lmp"
+pc_phys() {  # factor on the rotational energy -> physics_ok, rel_diff_ke_rot, rel_diff_ke, gain
+  COHDEM_STUB_ROT=$1 PATH="$work/pcstub:$PATH" python3 "$src/bench/peer_compare.py" --peers lammps --problems chute \
+    --runs 1 --steps 3 --cohdem "$bin" --chute-data "$data" --out "$work/pcs$1" > "$work/pcs$1.log" 2>&1 &&
+  python3 -c "
+import json
+r = json.load(open('$work/pcs$1/results.json'))['results']['chute']['codes']['lammps']
+print(r['physics_ok'], r['rel_diff_ke_rot'], r['rel_diff_ke'], r['rel_diff_ke_gain'])"
+}
+if p1=$(pc_phys 1.005) && p2=$(pc_phys 1.02) && python3 -c "
+a, b = '$p1'.split(), '$p2'.split()
+ok = a[0] == 'True' and abs(float(a[1]) - 0.005 / 1.005) < 1e-9 and float(a[2]) == 0 and float(a[3]) == 0
+ok = ok and b[0] == 'False' and abs(float(b[1]) - 0.02 / 1.02) < 1e-9 and float(b[2]) == 0
+raise SystemExit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   peer_compare.py judges the rotational energy ($p1 / $p2)"
+else echo "FAIL peer_compare.py rotational energy ($p1 / $p2)"; tail -5 "$work/pcs1.02.log"; fail=$((fail+1)); fi
 # contention.py end to end (cohdem alone, one round of one run of 3 steps; it needs two
 # cores, as CI has): both invocations pinned to the last core this process may use, the hog
 # stopped afterwards (no process of it left), and the summary line for the problem printed.
