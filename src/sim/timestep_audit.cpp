@@ -138,19 +138,23 @@ TimestepAudit audit_timestep(const System& s, const std::vector<double>& rmin, d
     if (f > kErrorRayleigh) raise(TimestepAudit::Error, std::string(buf) + ": above the hard bound of 50%");
     else if (f > kWarnRayleigh) raise(TimestepAudit::Warn, std::string(buf) + ": above the safe 20%");
   }
-  if (a.collision > 0 && std::isfinite(a.collision)) {
-    const double steps = a.collision / a.dt;
-    std::snprintf(buf, sizeof buf, "%.1f steps per collision (t_c = %.3g s for %s at %.3g m/s)", steps, a.collision,
-                  a.collision_pair.c_str(), v);
+  // A time to resolve (a collision, a spring's half period): steps of dt across it.
+  auto steps_across = [&](const double t, const std::string& what) {
+    const double steps = t / a.dt;
+    std::snprintf(buf, sizeof buf, "%.1f steps per %s", steps, what.c_str());
     if (steps < kErrorStepsPerCollision) raise(TimestepAudit::Error, std::string(buf) + ": below the hard bound of 8");
     else if (steps < kWarnStepsPerCollision) raise(TimestepAudit::Warn, std::string(buf) + ": below the safe 20");
+  };
+  char what[256];
+  if (a.collision > 0 && std::isfinite(a.collision)) {
+    std::snprintf(what, sizeof what, "collision (t_c = %.3g s for %s at %.3g m/s)", a.collision,
+                  a.collision_pair.c_str(), v);
+    steps_across(a.collision, what);
   }
   if (a.rolling > 0 && std::isfinite(a.rolling)) {
-    const double steps = a.rolling / a.dt;
-    std::snprintf(buf, sizeof buf, "%.1f steps per half period of the rolling spring (%.3g s for %s)", steps, a.rolling,
+    std::snprintf(what, sizeof what, "half period of the rolling spring (%.3g s for %s)", a.rolling,
                   a.rolling_pair.c_str());
-    if (steps < kErrorStepsPerCollision) raise(TimestepAudit::Error, std::string(buf) + ": below the hard bound of 8");
-    else if (steps < kWarnStepsPerCollision) raise(TimestepAudit::Warn, std::string(buf) + ": below the safe 20");
+    steps_across(a.rolling, what);
   }
   return a;
 }
