@@ -1,4 +1,4 @@
-// Contact history (tangential spring f_s and its stiffness, EPSD rolling spring) survives
+// Contact history (tangential spring f_s and its stiffness, EPSD rolling spring, MEPA's plastic overlap) survives
 // neighbor-list rebuilds and particle re-sorting in the middle of a contact.
 //
 // The reference is the same motion without any rebuild (a skin large enough that none is
@@ -49,8 +49,13 @@ struct Trace {
 };
 
 Trace run(const std::string& model, Mode mode) {
-  ParamSet p = params({{"kn", 4e4}, {"e", 0.5}, {"mu", 0.3}, {"damp_t", 1.0}, {"mu_r", 0.05}, {"eta_r", 0.3}});
-  // hertz_mindlin: E = 1e8 Pa gives ~4e4 N/m at the resting overlap, like kn above.
+  // hertz_mindlin: E = 1e8 Pa gives ~4e4 N/m at the resting overlap, like kn above. MEPA
+  // (n = 3/2, the ring shear ore's exponent): k1 = 2.5e7 N/m^1.5 rests a sphere at 2.6 um
+  // (1.5 k1 delta^0.5 = 6e4 N/m), with the plastic overlap, the adhesive branch and the
+  // tangential stiffness k1 delta^(1/2) in its history.
+  ParamSet p = model == "mepa" ? params({{"k1", 2.5e7}, {"k2", 1.25e8}, {"kadh", 2.5e7}, {"n", 1.5}, {"gamma_n", 0.5},
+                                         {"mu", 0.3}, {"mu_r", 0.05}, {"eta_r", 0.3}})
+                               : params({{"kn", 4e4}, {"e", 0.5}, {"mu", 0.3}, {"damp_t", 1.0}, {"mu_r", 0.05}, {"eta_r", 0.3}});
   auto s = make_system({{"glass", kRho, 1e8, 0.25}}, model, "epsd", p, 2.5e-5, {0, 0, -kG}, 5e-3);
   s->cfg.sort_every = mode == Mode::Natural ? 1 : 0;
   s->walls.push_back(plane({0, 0, 0}, {0, 0, 1}, 0));
@@ -108,7 +113,7 @@ int first_difference(const Trace& x, const Trace& y) {
 }  // namespace
 
 TEST(History, SurvivesRebuildsAndResorting) {
-  for (const char* model : {"linear", "hertz_mindlin"}) {
+  for (const char* model : {"linear", "hertz_mindlin", "mepa"}) {
     const Trace ref = run(model, Mode::Reference);
     ASSERT_EQ(ref.builds, 1u) << model << ": the reference must not rebuild";
     // The contacts carry history: A slides then rolls (|F_t| > 0 throughout), B is loaded.
