@@ -8,7 +8,7 @@ contact law. Particles start at rest and without contact history (the VTK frame 
 none), so that the first force evaluation is the same in engines that differ in what
 System::prepare does with moving contacts.
 
-Usage: ring_shear_bed_case.py RUN_DIR OUT.toml [--duration S] [--frames-every S]
+Usage: ring_shear_bed_case.py RUN_DIR OUT.toml [--duration S] [--frames-every S] [--sigma-fraction F]
 RUN_DIR is a ring shear output folder with case.toml (as scripts/validate/ring_shear.sh
 keeps it) and particles_consolidated.vtu. Example (docs/ring-shear.md, "Same physics"):
   scripts/validate/ring_shear.sh -s 1 -o /tmp/rs examples/ring_shear/copper_ore_5pct.toml
@@ -50,6 +50,8 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--duration", type=float, default=0.009)
     ap.add_argument("--frames-every", type=float, default=0.0005)
+    ap.add_argument("--sigma-fraction", type=float, default=1.0,
+                    help="the lid's load as a fraction of sigma_pre (0.2: the relief before the lowest shear point)")
     a = ap.parse_args()
     case_path = os.path.join(a.run_dir, "case.toml")
     text = open(case_path).read()
@@ -66,7 +68,7 @@ def main():
     rho = next(m for m in c["material"] if m["name"] == ore)["density"]
     g = c["simulation"].get("gravity", [0, 0, -9.81])
     free_mass = sum(rho * 4 / 3 * math.pi * rad ** 3 for rad, f in zip(v["radius"], v["flag"]) if f == 0)
-    preload = r["sigma_pre"] * L * W - free_mass * (-g[2])  # the lid's weight counterbalanced (normal -z)
+    preload = a.sigma_fraction * r["sigma_pre"] * L * W - free_mass * (-g[2])  # the lid's weight counterbalanced (normal -z)
     parts = []
     for k in range(len(v["id"])):
         f = v["flag"][k]
