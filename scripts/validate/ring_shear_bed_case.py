@@ -14,22 +14,9 @@ keeps it) and particles_consolidated.vtu. Example (docs/ring-shear.md, "Same phy
   scripts/validate/ring_shear.sh -s 1 -o /tmp/rs examples/ring_shear/copper_ore_5pct.toml
   scripts/validate/ring_shear_bed_case.py /tmp/rs/copper_ore_5pct/seed_1 /tmp/bed.toml
   scripts/validate/same_physics.py /tmp/bed.toml --b OTHER/build/cohdem"""
-import argparse, math, os, re, struct, sys, tomllib
+import argparse, math, os, re, sys, tomllib
 
-
-def read_vtu(path):
-    b = open(path, "rb").read()
-    i = b.index(b"<AppendedData")
-    j = b.index(b"_", i) + 1
-    hdr = b[:i].decode("latin1")
-    out = {}
-    for m in re.finditer(r'<DataArray type="(\w+)" Name="(\w+)" NumberOfComponents="(\d+)" format="appended" offset="(\d+)"', hdr):
-        typ, name, nc, off = m.group(1), m.group(2), int(m.group(3)), int(m.group(4))
-        code = {"Float64": "d", "UInt64": "Q", "Int64": "q", "Int32": "i", "UInt8": "B"}[typ]
-        n = struct.unpack_from("<Q", b, j + off)[0] // struct.calcsize(code)
-        v = struct.unpack_from("<%d%s" % (n, code), b, j + off + 8)
-        out[name] = [v[k * nc:(k + 1) * nc] for k in range(n // nc)] if nc > 1 else list(v)
-    return out
+from vtu import read_arrays as read_vtu
 
 
 def sections(text, names):

@@ -29,28 +29,16 @@ thousand steps in a dense bed. Exit status 0: same physics; 1: differs; 2: a run
 Example (docs/ring-shear.md, "Same physics"): the dense sheared ore bed against an engine of
 another commit built in a worktree:
   same_physics.py /tmp/dense/zlong.toml --b /tmp/wb/build/cohdem"""
-import argparse, glob, math, os, re, struct, subprocess, sys, tempfile
+import argparse, glob, os, subprocess, sys, tempfile
+
+from vtu import read_arrays
 
 
 def read_vtu(path):
-    """Point arrays of a cohdem particles_*.vtu (raw appended data, UInt64 headers): id -> (x, y, z)
-    and the mean radius."""
-    b = open(path, "rb").read()
-    i = b.index(b"<AppendedData")
-    j = b.index(b"_", i) + 1
-    hdr = b[:i].decode("latin1")
-    arrays = {}
-    for m in re.finditer(r'<DataArray type="(\w+)" Name="(\w+)" NumberOfComponents="(\d+)" format="appended" offset="(\d+)"', hdr):
-        typ, name, nc, off = m.group(1), m.group(2), int(m.group(3)), int(m.group(4))
-        code = {"Float64": "d", "UInt64": "Q", "Int64": "q", "Int32": "i", "UInt8": "B"}[typ]
-        nbytes = struct.unpack_from("<Q", b, j + off)[0]
-        count = nbytes // struct.calcsize(code)
-        arrays[name] = (nc, struct.unpack_from("<%d%s" % (count, code), b, j + off + 8))
-    nc, pts = arrays["Points"]
-    ids = arrays["id"][1]
-    pos = {ids[k]: pts[3 * k:3 * k + 3] for k in range(len(ids))}
-    radii = arrays["radius"][1]
-    return pos, sum(radii) / max(len(radii), 1)
+    """id -> (x, y, z) of a particles_*.vtu, and the mean radius."""
+    v = read_arrays(path)
+    radii = v["radius"]
+    return dict(zip(v["id"], v["Points"])), sum(radii) / max(len(radii), 1)
 
 
 def max_diff(p, q, periods):
