@@ -50,7 +50,6 @@ def main():
     walls = read_vtu(os.path.join(a.run_dir, "walls_consolidated.vtu"))["Points"]
     lid_z = max(p[2] for p in walls)  # the lid plane's corners
     L, W = r["length"], r["width"]
-    mats = [m["name"] for m in c["material"]]
     ore = r["material"]
     rho = next(m for m in c["material"] if m["name"] == ore)["density"]
     g = c["simulation"].get("gravity", [0, 0, -9.81])

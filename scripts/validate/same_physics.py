@@ -29,7 +29,7 @@ thousand steps in a dense bed. Exit status 0: same physics; 1: differs; 2: a run
 Example (docs/ring-shear.md, "Same physics"): the dense sheared ore bed against an engine of
 another commit built in a worktree:
   same_physics.py /tmp/dense/zlong.toml --b /tmp/wb/build/cohdem"""
-import argparse, glob, os, subprocess, sys, tempfile
+import argparse, glob, os, subprocess, sys, tempfile, tomllib
 
 from vtu import read_arrays
 
@@ -57,27 +57,19 @@ def max_diff(p, q, periods):
     return d
 
 
-def periods_of(case_file, overrides):
-    """Periodic lengths of the case's [domain] (0 where not periodic), read with tomllib."""
-    try:
-        import tomllib
-    except ImportError:  # Python < 3.11: no periodic correction
-        return [0.0, 0.0, 0.0]
+def time_step_and_periods(case_file, overrides):
+    """The case's time step (a simulation.dt override first) and its periodic lengths (0 where
+    not periodic), read once."""
     with open(case_file, "rb") as f:
         c = tomllib.load(f)
+    dt = float(c["simulation"]["dt"])
+    for o in overrides:
+        if o.startswith("simulation.dt="):
+            dt = float(o.split("=", 1)[1])
     dom = c.get("domain", {})
     per = dom.get("periodic", [False, False, False])
     lo, hi = dom.get("lo", [0, 0, 0]), dom.get("hi", [0, 0, 0])
-    return [float(hi[a]) - float(lo[a]) if per[a] else 0.0 for a in range(3)]
-
-
-def dt_of(case_file, overrides):
-    for o in overrides:
-        if o.startswith("simulation.dt="):
-            return float(o.split("=", 1)[1])
-    import tomllib
-    with open(case_file, "rb") as f:
-        return float(tomllib.load(f)["simulation"]["dt"])
+    return dt, [float(hi[k]) - float(lo[k]) if per[k] else 0.0 for k in range(3)]
 
 
 def run(binary, case_file, out, overrides):
@@ -112,11 +104,10 @@ def main():
     if a.duration is not None:
         common.append("simulation.duration=%r" % a.duration)
     out = a.out or tempfile.mkdtemp(prefix="same_physics_")
-    dt = dt_of(a.case, common)
+    dt, periods = time_step_and_periods(a.case, common)
     run(a.a, a.case, os.path.join(out, "A"), common)
     run(a.a, a.case, os.path.join(out, "A_perturbed"), common + ["simulation.dt=%.17g" % (dt * (1 + 1e-13))])
     run(b_bin, a.case, os.path.join(out, "B"), common + a.b_set)
-    periods = periods_of(a.case, common)
     frames = sorted(glob.glob(os.path.join(out, "A", "particles_[0-9]*.vtu")))
     if len(frames) < 3:
         sys.stderr.write("same_physics: fewer than 3 frames: set output.frame_interval (--frames-every)\n")
