@@ -13,6 +13,7 @@ PKGS=(
   gnuplot-nox           # PNG plots of results
   binutils              # objdump: the test that the contact laws are inlined into the force loops
   valgrind              # callgrind: bench/instructions.py counts instructions per particle-step
+  python3               # 3.11 (tomllib): the CLI tests' summary checks, bench/ and scripts/validate/ scripts
 )
 missing=()
 for p in "${PKGS[@]}"; do
