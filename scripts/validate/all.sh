@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every packed-bed validation run in turn (about 45 min on 2 cores), then copies the plots to
+# Every packed-bed validation run in turn (about 6 min on 2 cores; 45 before the speed work), then copies the plots to
 # docs/img/ (with --update-docs).
 source "$(dirname "$0")/common.sh"
 here=$(dirname "$0")
