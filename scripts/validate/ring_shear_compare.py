@@ -51,13 +51,29 @@ for g, v in groups.items():
     print(f"{g}: phi_lin mean {statistics.mean(v):.1f} deg, std {sd:.1f} deg, min {min(v):.1f}, max {max(v):.1f} (n = {len(v)})")
 xmax = 1.15 * max(max(1e-3 * float(p["sigma"]) for p in csv.DictReader(open(os.path.join(r, "shear_points.csv")))) for r in runs)
 cmds = []
+# Up to eight runs of one group: a colour and a key entry each. More runs, or several groups
+# (fillings of the reduced cell beside the annulus'): a colour and a point type per group and
+# one key entry per group with its mean and spread, so the groups can be told apart.
+by_group = len(groups) > 1 or len(plots) > 8
+order = list(groups)
+titled = set()
 for k, name, m, c, phi in plots:
-    cmds.append(f"'{tmp}/{k}.dat' w p pt 7 lc {k+1} t '{name}: {phi:.1f} deg'")
-    cmds.append(f"{m}*x+{c} w l lc {k+1} notitle")
+    if by_group:
+        g = name.split("/")[0]
+        gi = order.index(g)
+        v = groups[g]
+        sd = f" +- {statistics.stdev(v):.1f}" if len(v) > 1 else ""
+        title = f"t '{g}: phi_lin {statistics.mean(v):.1f}{sd} deg (n = {len(v)})'" if g not in titled else "notitle"
+        titled.add(g)
+        cmds.append(f"'{tmp}/{k}.dat' w p pt {(7, 5, 9, 11, 13)[gi % 5]} lc {gi + 1} {title}")
+        cmds.append(f"{m}*x+{c} w l lc {gi + 1} notitle")
+    else:
+        cmds.append(f"'{tmp}/{k}.dat' w p pt 7 lc {k+1} t '{name}: {phi:.1f} deg'")
+        cmds.append(f"{m}*x+{c} w l lc {k+1} notitle")
 gp = f"""set terminal pngcairo size 800,560 font ',10' noenhanced
 set output '{png}'
 set title 'measured shear points and least-squares yield loci'
-set xlabel 'normal stress (kPa)'; set ylabel 'shear stress (kPa)'; set grid; set key left top
+set xlabel 'normal stress (kPa)'; set ylabel 'shear stress (kPa)'; set grid; set key right bottom
 set xrange [0:{xmax}]; set yrange [0:*]
 plot {", ".join(cmds)}
 """
