@@ -41,7 +41,7 @@ for k, run in enumerate(runs):
     groups.setdefault(group, []).append(phi)
     tau_each = j["pre_shear"]["tau_each"]
     print(f"| {name} | {j['cell']} | {j['particles']} | " + " ".join(f"({x:.1f}, {t:.1f})" for x, t in zip(xs, ys)) +
-          f" | {phi:.1f} | {c:.1f} | {ffc} | {1e-3*tau_each[0]:.1f} -> {1e-3*tau_each[-1]:.1f} | {j.get('cpu_time_s', j['wall_time_s'])/60:.0f} |")
+          f" | {phi:.1f} | {c:.1f} | {ffc} | {1e-3*tau_each[0]:.1f} -> {1e-3*tau_each[-1]:.1f} | {(j['cpu_time_s'] if 'cpu_time_s' in j else j['wall_time_s'])/60:.0f} |")
     with open(os.path.join(tmp, f"{k}.dat"), "w") as f:
         for x, t in zip(xs, ys): f.write(f"{x} {t}\n")
     plots.append((k, name, m, c, phi))

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# scripts/validate/ring_shear_compare.py, on made-up runs whose shear points lie exactly on
+# known loci tau = c + tan(phi) sigma: the table gives each run's phi and c back (least
+# squares on exact points: to the printed digit), the per-group line gives the mean and the
+# sample standard deviation of phi (30, 35, 40 deg: 35.0 and 5.0), and the figure is written
+# both ways (one key entry per run for a single small group; per group with two groups).
+set -u
+bin=$1; src=$2
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+fail=0
+mkrun() {  # group seed phi_deg c_kPa cell
+  local d=$work/$1/seed_$2
+  mkdir -p "$d"
+  python3 - "$d" "$3" "$4" "$5" <<'EOF'
+import json, math, sys
+d, phi, c, cell = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+m = math.tan(math.radians(phi))
+sig = [11e3, 22e3, 33e3, 44e3]
+with open(d + "/shear_points.csv", "w") as f:
+    f.write("sigma,tau_measured,tau_normalized\n")
+    for s in sig:
+        f.write(f"{s!r},{c * 1e3 + m * s!r},{c * 1e3 + m * s!r}\n")
+json.dump({"cell": cell, "particles": 1968, "pre_shear": {"tau_each": [45e3, 48e3]}, "cpu_time_s": 180.0,
+           "yield_locus": {"ffc": 1.7, "phi_lin_deg": phi, "cohesion": c * 1e3}}, open(d + "/summary.json", "w"))
+EOF
+}
+mkrun box 1 30 18 shear_box; mkrun box 2 35 17 shear_box; mkrun box 3 40 16 shear_box
+mkrun ring 1 36 14 annulus
+expect() {  # what, pattern, text
+  if echo "$3" | grep -qF -- "$2"; then echo "ok   $1"; else echo "FAIL $1: no '$2' in:"; echo "$3"; fail=$((fail + 1)); fi
+}
+out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/one.png" "$work"/box/seed_* 2>&1) || { echo "FAIL one group: exit $?"; echo "$out"; fail=$((fail + 1)); }
+expect "run 1: phi 30.0, c 18.0" "| 30.0 | 18.0 | 1.70 | 45.0 -> 48.0 | 3 |" "$out"
+expect "run 3: phi 40.0, c 16.0" "| 40.0 | 16.0 |" "$out"
+expect "group mean and standard deviation" "box: phi_lin mean 35.0 deg, std 5.0 deg, min 30.0, max 40.0 (n = 3)" "$out"
+[ -s "$work/one.png" ] && echo "ok   figure, one group" || { echo "FAIL no figure (one group)"; fail=$((fail + 1)); }
+out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/two.png" "$work"/box/seed_* "$work"/ring/seed_1 2>&1) || { echo "FAIL two groups: exit $?"; echo "$out"; fail=$((fail + 1)); }
+expect "second group" "ring: phi_lin mean 36.0 deg, std nan deg, min 36.0, max 36.0 (n = 1)" "$out"
+expect "its cell" "| ring/seed_1 | annulus | 1968 |" "$out"
+[ -s "$work/two.png" ] && echo "ok   figure, two groups" || { echo "FAIL no figure (two groups)"; fail=$((fail + 1)); }
+[ $fail = 0 ]
