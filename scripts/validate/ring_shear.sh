@@ -72,7 +72,7 @@ for s in seeds:
         # other evaluation holds phi_lin, c, sigma_c, ffc only; sigma_1 = ffc sigma_c
         y = dict(j.get("yield_locus_raw") or j["yield_locus_measured_points"])
         if "error" not in y:
-            finite = not isinstance(y["ffc"], str)
+            finite = isinstance(y["ffc"], (int, float))  # not "inf", not null
             sp, tp = j["pre_shear"]["sigma"], j["pre_shear"]["tau"]
             y.update(sigma_1=y["ffc"] * y["sigma_c"] if finite else math.nan, phi_e_deg=math.nan,
                      phi_sf_deg=math.degrees(math.atan2(tp, sp)))
@@ -81,8 +81,13 @@ for s in seeds:
     if "error" in y:
         print(f"seed {s}: evaluation failed: {y['error']}")
         continue
-    ffc = y["ffc"] if not isinstance(y["ffc"], str) else math.inf
-    rows.append([s, y["phi_lin_deg"], y["cohesion"], y["sigma_1"], y["sigma_c"], ffc, y["phi_e_deg"], y["phi_sf_deg"],
+    # null (no steady-state circle: sigma_2 < 0, steady_state_error) counts as not a number;
+    # the locus, sigma_c and phi_sf are still given then
+    num = lambda v: math.nan if v is None else v
+    ffc = math.inf if isinstance(y["ffc"], str) else num(y["ffc"])
+    if "steady_state_error" in y:
+        print(f"seed {s}: sigma_1, ffc, phi_e not evaluated: {y['steady_state_error']}")
+    rows.append([s, y["phi_lin_deg"], y["cohesion"], num(y["sigma_1"]), y["sigma_c"], ffc, num(y["phi_e_deg"]), y["phi_sf_deg"],
                  j["pre_shear"]["sigma"], j["pre_shear"]["tau"], j["bulk_density_preshear"], j["particles"], j["steps"],
                  j["wall_time_s"], j.get("cpu_time_s", math.nan), j["particle_steps_per_s"]])
 with open(os.path.join(d, "results.csv"), "w") as f:

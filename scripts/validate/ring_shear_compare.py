@@ -35,7 +35,7 @@ for k, run in enumerate(runs):
     c = my - m * mx
     phi = math.degrees(math.atan(m))
     y = measured_locus(j)
-    ffc = "-" if "error" in y else (y["ffc"] if isinstance(y["ffc"], str) else f'{y["ffc"]:.2f}')
+    ffc = "-" if "error" in y or y["ffc"] is None else (y["ffc"] if isinstance(y["ffc"], str) else f'{y["ffc"]:.2f}')
     group = os.path.basename(os.path.dirname(os.path.abspath(run)))
     name = f"{group}/{os.path.basename(os.path.abspath(run))}"
     groups.setdefault(group, []).append(phi)

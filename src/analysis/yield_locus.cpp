@@ -112,19 +112,26 @@ YieldLocusResult evaluate_yield_locus(ShearPoint pre, std::span<const ShearPoint
   }
   const double s = (A + cc * sn * cs - cs * std::sqrt(q)) / (cs * cs);
   const double r = s * sn + cc * cs;
+  // Steady-state-flow angle (RST-CONTROL): line through origin and pre-shear point.
+  out.phi_sf = std::atan2(T, A);
+  if (!(s - r >= 0) || !(r >= 0)) {
+    // The circle reaches into tension: no consolidation state with both principal stresses
+    // compressive, so sigma_1 and what follows from it are not evaluated. The locus itself,
+    // sigma_c and phi_sf stand (a very cohesive sample pre-sheared at a low stress).
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    out.steady_state = false;
+    out.steady_state_error = "the steady-state Mohr circle has sigma_2 = " + pa(s - r) +
+                             " < 0 (pre-shear stress too low for this cohesion): sigma_1, phi_e and ffc not evaluated";
+    out.sigma_1 = out.sigma_2 = out.sigma_tangent = out.phi_e = out.ffc = nan;
+    return out;
+  }
   out.sigma_1 = s + r;
   out.sigma_2 = s - r;
   out.sigma_tangent = s - r * sn;
-  if (!(out.sigma_2 >= 0) || !(r >= 0))
-    throw std::invalid_argument(
-        "yield locus: the steady-state Mohr circle has sigma_2 = " + pa(out.sigma_2) +
-        " < 0 (pre-shear stress too low for this cohesion); cannot evaluate sigma_1");
 
   // Effective angle of internal friction: line through the origin tangent to the steady-state
   // circle, sin(phi_e) = (sigma_1 - sigma_2)/(sigma_1 + sigma_2) = r/s (Schulze, ch. 3).
   out.phi_e = std::asin(std::min(1.0, r / s));
-  // Steady-state-flow angle (RST-CONTROL): line through origin and pre-shear point.
-  out.phi_sf = std::atan2(T, A);
 
   if (out.sigma_c > 0) {
     out.ffc = out.sigma_1 / out.sigma_c;

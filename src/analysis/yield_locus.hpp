@@ -4,6 +4,7 @@
 #pragma once
 #include <cstddef>
 #include <optional>
+#include <string>
 #include <span>
 
 namespace cohdem {
@@ -37,14 +38,21 @@ struct YieldLocusResult {
   /// The pre-shear point lay above the locus and the limiting circle (tangent at the pre-shear
   /// point to the locus moved up through it) was used (allow_preshear_above).
   bool preshear_above_locus = false;
+  /// False when the steady-state circle through the pre-shear point and tangent to the locus
+  /// reaches into tension (sigma_2 < 0: the consolidation stress too low for the locus's
+  /// cohesion). sigma_1, sigma_2, sigma_tangent, phi_e and ffc are then NaN (ffc_infinite
+  /// false) and steady_state_error says why; the locus (phi_lin, cohesion, r_squared), sigma_c
+  /// and phi_sf do not depend on that circle and are given as usual.
+  bool steady_state = true;
+  std::string steady_state_error;
 };
 
 /// Evaluates one yield locus. Throws std::invalid_argument for fewer than 2 shear points,
 /// shear points all at the same sigma, a non-positive slope, a pre-shear point with
 /// sigma_pre <= 0, a pre-shear point above the linearized yield locus (no Mohr circle through
 /// it can be tangent to the locus; unless allow_preshear_above, which then takes the circle
-/// tangent at the pre-shear point to the line of the locus's slope through it), or a
-/// steady-state circle with sigma_2 < 0.
+/// tangent at the pre-shear point to the line of the locus's slope through it). A
+/// steady-state circle with sigma_2 < 0 is not an error: see YieldLocusResult::steady_state.
 YieldLocusResult evaluate_yield_locus(ShearPoint pre_shear,
                                       std::span<const ShearPoint> shear_points,
                                       std::optional<double> bulk_density = std::nullopt,

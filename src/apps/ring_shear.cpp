@@ -598,17 +598,25 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   const double deg = 180.0 / M_PI;
   try {
     const YieldLocusResult raw = evaluate_yield_locus({sp, tp}, other_pts, mean_density, true);
-    j[r.normalize_points ? "yield_locus_measured_points" : "yield_locus_normalized_points"] = {{"phi_lin_deg", raw.phi_lin * deg}, {"cohesion", raw.cohesion}, {"sigma_c", raw.sigma_c},
-                            {"ffc", raw.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(raw.ffc)}};
+    auto& o = j[r.normalize_points ? "yield_locus_measured_points" : "yield_locus_normalized_points"];
+    o = {{"phi_lin_deg", raw.phi_lin * deg}, {"cohesion", raw.cohesion}, {"sigma_c", raw.sigma_c},
+         {"ffc", !raw.steady_state ? nlohmann::json(nullptr) : raw.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(raw.ffc)}};
+    if (!raw.steady_state) o["steady_state_error"] = raw.steady_state_error;
   } catch (const std::invalid_argument& e) {
     j[r.normalize_points ? "yield_locus_measured_points" : "yield_locus_normalized_points"] = {{"error", e.what()}};
   }
   if (evaluated) {
+    // Without a steady-state circle (sigma_2 < 0) its values are null and the reason is given.
+    const auto circ = [&](double v) { return yl.steady_state ? nlohmann::json(v) : nlohmann::json(nullptr); };
     j["yield_locus"] = {{"phi_lin_deg", yl.phi_lin * deg}, {"cohesion", yl.cohesion}, {"r_squared", yl.r_squared},
-                        {"sigma_1", yl.sigma_1}, {"sigma_2", yl.sigma_2}, {"sigma_c", yl.sigma_c},
-                        {"ffc", yl.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(yl.ffc)},
-                        {"phi_e_deg", yl.phi_e * deg}, {"phi_sf_deg", yl.phi_sf * deg},
+                        {"sigma_1", circ(yl.sigma_1)}, {"sigma_2", circ(yl.sigma_2)}, {"sigma_c", yl.sigma_c},
+                        {"ffc", !yl.steady_state ? nlohmann::json(nullptr) : yl.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(yl.ffc)},
+                        {"phi_e_deg", circ(yl.phi_e * deg)}, {"phi_sf_deg", yl.phi_sf * deg},
                         {"preshear_above_locus", yl.preshear_above_locus}};
+    if (!yl.steady_state) {
+      j["yield_locus"]["steady_state_error"] = yl.steady_state_error;
+      spdlog::warn("yield locus: {}", yl.steady_state_error);
+    }
     if (yl.preshear_above_locus)
       spdlog::warn("the pre-shear point lies above the linearized yield locus (scatter of a nearly cohesionless sample?): "
                    "sigma_1 from the circle tangent at the pre-shear point");
@@ -651,7 +659,9 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     plot_png(out / "shear_curve.png", a);
     PlotSpec b;
     b.title = evaluated ? fmt::format("yield locus: phi_lin = {:.1f} deg, c = {:.3g} kPa, ffc = {}", yl.phi_lin * deg,
-                                      1e-3 * yl.cohesion, yl.ffc_infinite ? std::string("inf") : fmt::format("{:.2f}", yl.ffc))
+                                      1e-3 * yl.cohesion,
+                                      !yl.steady_state ? std::string("n/a (sigma_2 < 0)")
+                                      : yl.ffc_infinite ? std::string("inf") : fmt::format("{:.2f}", yl.ffc))
                         : "yield locus (evaluation failed: " + eval_error + ")";
     b.xlabel = "normal stress sigma (kPa)";
     b.ylabel = "shear stress tau (kPa)";
@@ -660,10 +670,11 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     for (const auto& q : sp_pts) { pts.x.push_back(1e-3 * q.sigma); pts.y.push_back(1e-3 * q.tau); }
     b.series = {pts, pre};
     if (evaluated) {
-      const double smax = std::max(yl.sigma_1, sp) * 1.1;
+      const double smax = (yl.steady_state ? std::max(yl.sigma_1, sp) : sp) * 1.1;
       Series line{"yield locus", {0, 1e-3 * smax}, {1e-3 * yl.cohesion, 1e-3 * (yl.cohesion + std::tan(yl.phi_lin) * smax)}, "lines"};
       b.series.push_back(line);
-      b.series.push_back(circle(1e-3 * 0.5 * (yl.sigma_1 + yl.sigma_2), 1e-3 * 0.5 * (yl.sigma_1 - yl.sigma_2), "steady-state flow", true));
+      if (yl.steady_state)
+        b.series.push_back(circle(1e-3 * 0.5 * (yl.sigma_1 + yl.sigma_2), 1e-3 * 0.5 * (yl.sigma_1 - yl.sigma_2), "steady-state flow", true));
       if (yl.sigma_c > 0) b.series.push_back(circle(1e-3 * 0.5 * yl.sigma_c, 1e-3 * 0.5 * yl.sigma_c, "unconfined failure", true));
     }
     plot_png(out / "yield_locus.png", b);
@@ -679,9 +690,14 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   if (evaluated) {
     fmt::print("  angle of internal friction (linearized yield locus) phi_lin = {:.2f} deg\n", yl.phi_lin * deg);
     fmt::print("  cohesion c = {:.4g} kPa, unconfined yield strength sigma_c = {:.4g} kPa\n", 1e-3 * yl.cohesion, 1e-3 * yl.sigma_c);
-    fmt::print("  major consolidation stress sigma_1 = {:.4g} kPa, ffc = {}\n", 1e-3 * yl.sigma_1,
-               yl.ffc_infinite ? std::string("inf (no cohesion)") : fmt::format("{:.2f}", yl.ffc));
-    fmt::print("  effective angle of internal friction phi_e = {:.2f} deg, phi_sf = {:.2f} deg\n", yl.phi_e * deg, yl.phi_sf * deg);
+    if (yl.steady_state) {
+      fmt::print("  major consolidation stress sigma_1 = {:.4g} kPa, ffc = {}\n", 1e-3 * yl.sigma_1,
+                 yl.ffc_infinite ? std::string("inf (no cohesion)") : fmt::format("{:.2f}", yl.ffc));
+      fmt::print("  effective angle of internal friction phi_e = {:.2f} deg, phi_sf = {:.2f} deg\n", yl.phi_e * deg, yl.phi_sf * deg);
+    } else {
+      fmt::print("  {}\n", yl.steady_state_error);
+      fmt::print("  steady-state-flow angle phi_sf = {:.2f} deg\n", yl.phi_sf * deg);
+    }
   } else {
     fmt::print("  yield locus evaluation failed: {}\n", eval_error);
   }

@@ -4,24 +4,32 @@
 # squares on exact points: to the printed digit), the per-group line gives the mean and the
 # sample standard deviation of phi (30, 35, 40 deg: 35.0 and 5.0), and the figure is written
 # both ways (one key entry per run for a single small group; per group with two groups).
+# scripts/validate/ring_shear.sh --table-only on the same runs and on one whose steady-state
+# circle reached into tension (sigma_1, ffc, phi_e null with steady_state_error, the locus
+# given): its phi and c are counted, its ffc is not, and the seed is named.
 set -u
 bin=$1; src=$2
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 fail=0
-mkrun() {  # group seed phi_deg c_kPa cell
+mkrun() {  # group seed phi_deg c_kPa cell [nocircle]
   local d=$work/$1/seed_$2
   mkdir -p "$d"
-  python3 - "$d" "$3" "$4" "$5" <<'EOF'
+  python3 - "$d" "$3" "$4" "$5" "${6:-}" <<'EOF'
 import json, math, sys
-d, phi, c, cell = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+d, phi, c, cell, nocircle = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), sys.argv[4], sys.argv[5]
 m = math.tan(math.radians(phi))
 sig = [11e3, 22e3, 33e3, 44e3]
 with open(d + "/shear_points.csv", "w") as f:
     f.write("sigma,tau_measured,tau_normalized\n")
     for s in sig:
         f.write(f"{s!r},{c * 1e3 + m * s!r},{c * 1e3 + m * s!r}\n")
-json.dump({"cell": cell, "particles": 1968, "pre_shear": {"tau_each": [45e3, 48e3]}, "cpu_time_s": 180.0,
-           "yield_locus": {"ffc": 1.7, "phi_lin_deg": phi, "cohesion": c * 1e3}}, open(d + "/summary.json", "w"))
+yl = {"ffc": 1.7, "phi_lin_deg": phi, "cohesion": c * 1e3, "sigma_1": 1e5, "sigma_c": 6e4, "phi_e_deg": 55.0,
+      "phi_sf_deg": 41.0}
+if nocircle:
+    yl.update(ffc=None, sigma_1=None, sigma_2=None, phi_e_deg=None, steady_state_error="sigma_2 < 0 (made up)")
+json.dump({"cell": cell, "particles": 1968, "pre_shear": {"tau_each": [45e3, 48e3], "sigma": 54.8e3, "tau": 46.5e3},
+           "cpu_time_s": 180.0, "wall_time_s": 181.0, "steps": 1000, "particle_steps_per_s": 1e7,
+           "bulk_density_preshear": 1400.0, "yield_locus": yl}, open(d + "/summary.json", "w"))
 EOF
 }
 mkrun box 1 30 18 shear_box; mkrun box 2 35 17 shear_box; mkrun box 3 40 16 shear_box
@@ -38,4 +46,12 @@ out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/two.png" "$wo
 expect "second group" "ring: phi_lin mean 36.0 deg, std nan deg, min 36.0, max 36.0 (n = 1)" "$out"
 expect "its cell" "| ring/seed_1 | annulus | 1968 |" "$out"
 [ -s "$work/two.png" ] && echo "ok   figure, two groups" || { echo "FAIL no figure (two groups)"; fail=$((fail + 1)); }
+mkrun box 4 45 25 shear_box nocircle
+out=$(COHDEM_BIN="$bin" bash "$src/scripts/validate/ring_shear.sh" --table-only -s "1 2 3 4" -o "$work" box.toml 2>&1) || { echo "FAIL table: exit $?"; echo "$out"; fail=$((fail + 1)); }
+expect "the seed without a circle named" "seed 4: sigma_1, ffc, phi_e not evaluated: sigma_2 < 0 (made up)" "$out"
+expect "its phi counted" "phi_lin_deg: mean 37.5, median 37.5, min 30, max 45, std 6.45 (n = 4)" "$out"
+expect "its c counted" "cohesion_Pa: mean 1.9e+04, median 1.75e+04, min 1.6e+04, max 2.5e+04, std 4.08e+03 (n = 4)" "$out"
+expect "its ffc not" "ffc: mean 1.7, median 1.7, min 1.7, max 1.7, std 0 (n = 3)" "$out"
+out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/three.png" "$work"/box/seed_* 2>&1) || { echo "FAIL compare with a null ffc: exit $?"; echo "$out"; fail=$((fail + 1)); }
+expect "null ffc shown as -" "| 45.0 | 25.0 | - |" "$out"
 [ $fail = 0 ]

@@ -142,6 +142,38 @@ TEST(YieldLocus, PreShearAboveLocusAllowed) {
   EXPECT_FALSE(evaluate_yield_locus({20000, 11000}, good, std::nullopt, true).preshear_above_locus);
 }
 
+// A very cohesive locus, tau = tan30 sigma + 20 kPa, pre-sheared at only (10, 25) kPa (below
+// the locus's 25.77 kPa there): the circle through the pre-shear point tangent to the locus
+// has centre s = [A + c sin cos - cos sqrt(tau_YL^2 - T^2)] / cos^2 = 17644.0 Pa and radius
+// r = s sin + c cos = 26142.5 Pa (docs/analysis.md), so sigma_2 = s - r = -8498.5 Pa: no
+// compressive consolidation state. sigma_1, sigma_2, sigma_tangent, phi_e and ffc are NaN and
+// say why; the locus, sigma_c = 2 c cos30 / (1 - sin30) = 69282.03 Pa and phi_sf =
+// atan(25/10) are still given (they do not use that circle).
+TEST(YieldLocus, SteadyStateCircleInTensionKeepsTheLocus) {
+  const auto pts = on_line(kTan30, 20000, {2000, 5000, 8000});
+  const YieldLocusResult r = evaluate_yield_locus({10000, 25000}, pts, 1400.0, true);
+  EXPECT_FALSE(r.steady_state);
+  EXPECT_NE(r.steady_state_error.find("sigma_2 = -8498.5"), std::string::npos) << r.steady_state_error;
+  EXPECT_NE(r.steady_state_error.find("not evaluated"), std::string::npos) << r.steady_state_error;
+  EXPECT_NEAR(r.phi_lin, M_PI / 6, 1e-12);
+  EXPECT_NEAR(r.cohesion, 20000, 1e-8);
+  EXPECT_NEAR(r.sigma_c, 40000 * std::cos(M_PI / 6) / (1 - std::sin(M_PI / 6)), 1e-7);
+  EXPECT_NEAR(r.phi_sf, std::atan2(25000.0, 10000.0), 1e-15);
+  EXPECT_TRUE(std::isnan(r.sigma_1));
+  EXPECT_TRUE(std::isnan(r.sigma_2));
+  EXPECT_TRUE(std::isnan(r.sigma_tangent));
+  EXPECT_TRUE(std::isnan(r.phi_e));
+  EXPECT_TRUE(std::isnan(r.ffc));
+  EXPECT_FALSE(r.ffc_infinite);
+  EXPECT_FALSE(r.preshear_above_locus);
+  // The same locus pre-sheared at a higher stress has its circle in compression: evaluated.
+  const YieldLocusResult ok = evaluate_yield_locus({60000, 50000}, pts);
+  EXPECT_TRUE(ok.steady_state);
+  EXPECT_TRUE(ok.steady_state_error.empty());
+  EXPECT_GE(ok.sigma_2, 0.0);
+  EXPECT_NEAR(ok.ffc, ok.sigma_1 / ok.sigma_c, 1e-12);
+}
+
 TEST(YieldLocus, Errors) {
   const auto good = on_line(kTan30, 2000, {4000, 8000});
   EXPECT_THROW(evaluate_yield_locus({20000, 11000}, on_line(kTan30, 2000, {4000})),
