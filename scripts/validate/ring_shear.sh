@@ -86,7 +86,7 @@ for s in seeds:
     num = lambda v: math.nan if v is None else v
     ffc = math.inf if isinstance(y["ffc"], str) else num(y["ffc"])
     if "steady_state_error" in y:
-        print(f"seed {s}: sigma_1, ffc, phi_e not evaluated: {y['steady_state_error']}")
+        print(f"seed {s}: {y['steady_state_error']}")
     rows.append([s, y["phi_lin_deg"], y["cohesion"], num(y["sigma_1"]), y["sigma_c"], ffc, num(y["phi_e_deg"]), y["phi_sf_deg"],
                  j["pre_shear"]["sigma"], j["pre_shear"]["tau"], j["bulk_density_preshear"], j["particles"], j["steps"],
                  j["wall_time_s"], j.get("cpu_time_s", math.nan), j["particle_steps_per_s"]])
