@@ -4,8 +4,8 @@
 #pragma once
 #include <cstddef>
 #include <optional>
-#include <string>
 #include <span>
+#include <string>
 
 namespace cohdem {
 
