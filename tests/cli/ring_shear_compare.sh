@@ -6,7 +6,8 @@
 # both ways (one key entry per run for a single small group; per group with two groups).
 # scripts/validate/ring_shear.sh --table-only on the same runs and on one whose steady-state
 # circle reached into tension (sigma_1, ffc, phi_e null with steady_state_error, the locus
-# given): its phi and c are counted, its ffc is not, and the seed is named.
+# given): its phi and c are counted, its ffc is not, and the seed is named. --flow-function
+# draws the runs' (sigma_1, sigma_c) points, leaving that run out.
 set -u
 bin=$1; src=$2
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
@@ -27,9 +28,12 @@ yl = {"ffc": 1.7, "phi_lin_deg": phi, "cohesion": c * 1e3, "sigma_1": 1e5, "sigm
       "phi_sf_deg": 41.0}
 if nocircle:
     yl.update(ffc=None, sigma_1=None, sigma_2=None, phi_e_deg=None, steady_state_error="sigma_2 < 0 (made up)")
-json.dump({"cell": cell, "particles": 1968, "pre_shear": {"tau_each": [45e3, 48e3], "sigma": 54.8e3, "tau": 46.5e3},
-           "cpu_time_s": 180.0, "wall_time_s": 181.0, "steps": 1000, "particle_steps_per_s": 1e7,
-           "bulk_density_preshear": 1400.0, "yield_locus": yl}, open(d + "/summary.json", "w"))
+j = {"cell": cell, "particles": 1968, "pre_shear": {"tau_each": [45e3, 48e3], "sigma": 54.8e3, "tau": 46.5e3},
+     "cpu_time_s": 180.0, "wall_time_s": 181.0, "steps": 1000, "particle_steps_per_s": 1e7,
+     "bulk_density_preshear": 1400.0, "yield_locus": yl}
+if cell == "annulus":  # a report that names its consolidation stress: the group says it
+    j["sigma_pre_target"] = 54.8e3
+json.dump(j, open(d + "/summary.json", "w"))
 EOF
 }
 mkrun box 1 30 18 shear_box; mkrun box 2 35 17 shear_box; mkrun box 3 40 16 shear_box
@@ -43,8 +47,8 @@ expect "run 3: phi 40.0, c 16.0" "| 40.0 | 16.0 |" "$out"
 expect "group mean and standard deviation" "box: phi_lin mean 35.0 deg, std 5.0 deg, min 30.0, max 40.0 (n = 3)" "$out"
 [ -s "$work/one.png" ] && echo "ok   figure, one group" || { echo "FAIL no figure (one group)"; fail=$((fail + 1)); }
 out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/two.png" "$work"/box/seed_* "$work"/ring/seed_1 2>&1) || { echo "FAIL two groups: exit $?"; echo "$out"; fail=$((fail + 1)); }
-expect "second group" "ring: phi_lin mean 36.0 deg, std nan deg, min 36.0, max 36.0 (n = 1)" "$out"
-expect "its cell" "| ring/seed_1 | annulus | 1968 |" "$out"
+expect "second group, with its consolidation stress" "ring at 54.8 kPa: phi_lin mean 36.0 deg, std nan deg, min 36.0, max 36.0 (n = 1)" "$out"
+expect "its cell" "| ring at 54.8 kPa/seed_1 | annulus | 1968 |" "$out"
 [ -s "$work/two.png" ] && echo "ok   figure, two groups" || { echo "FAIL no figure (two groups)"; fail=$((fail + 1)); }
 mkrun box 4 45 25 shear_box nocircle
 out=$(COHDEM_BIN="$bin" bash "$src/scripts/validate/ring_shear.sh" --table-only -s "1 2 3 4" -o "$work" box.toml 2>&1) || { echo "FAIL table: exit $?"; echo "$out"; fail=$((fail + 1)); }
@@ -54,4 +58,8 @@ expect "its c counted" "cohesion_Pa: mean 1.9e+04, median 1.75e+04, min 1.6e+04,
 expect "its ffc not" "ffc: mean 1.7, median 1.7, min 1.7, max 1.7, std 0 (n = 3)" "$out"
 out=$(python3 "$src/scripts/validate/ring_shear_compare.py" "$work/three.png" "$work"/box/seed_* 2>&1) || { echo "FAIL compare with a null ffc: exit $?"; echo "$out"; fail=$((fail + 1)); }
 expect "null ffc shown as -" "| 45.0 | 25.0 | - |" "$out"
+out=$(python3 "$src/scripts/validate/ring_shear_compare.py" --flow-function "$work/ff.png" "$work/four.png" "$work"/box/seed_* "$work"/ring/seed_1 2>&1) || { echo "FAIL flow function: exit $?"; echo "$out"; fail=$((fail + 1)); }
+expect "flow function drawn" "flow function: $work/ff.png" "$out"
+expect "the run without sigma_1 left out of it" "flow function, box: mean sigma_1 100.0 kPa, mean sigma_c 60.0 kPa, ratio 1.67 (n = 3)" "$out"
+[ -s "$work/ff.png" ] && echo "ok   flow function figure" || { echo "FAIL no flow function figure"; fail=$((fail + 1)); }
 [ $fail = 0 ]
