@@ -22,6 +22,7 @@ if len(args) < 2:
 png, runs = args[0], args[1:]
 tmp = tempfile.mkdtemp()
 flow = {}  # group -> [(sigma_1, sigma_c) in kPa]
+MARK = (7, 5, 9, 11, 13)  # gnuplot's filled point types, one a group; each open one is the type - 1
 
 
 def measured_locus(j):
@@ -31,7 +32,7 @@ def measured_locus(j):
     return j["yield_locus_measured_points"] if j.get("normalized_points") else j["yield_locus"]
 
 
-groups, plots = {}, []
+groups, plots, smax = {}, [], 0.0
 print("| run | cell | particles | shear points (sigma, tau), kPa | phi_lin, deg | c, kPa | ffc | pre-shear tau first -> last, kPa | CPU (or wall), min |")
 print("|---|---|---:|---|---:|---:|---:|---|---:|")
 for k, run in enumerate(runs):
@@ -50,6 +51,7 @@ for k, run in enumerate(runs):
         group += f" at {1e-3 * j['sigma_pre_target']:.1f} kPa"
     name = f"{group}/{os.path.basename(os.path.abspath(run))}"
     groups.setdefault(group, []).append(phi)
+    smax = max(smax, max(xs))
     if "error" not in y and y.get("sigma_1") is not None and y.get("sigma_c") is not None:
         flow.setdefault(group, []).append((1e-3 * y["sigma_1"], 1e-3 * y["sigma_c"]))
     tau_each = j["pre_shear"]["tau_each"]
@@ -57,12 +59,14 @@ for k, run in enumerate(runs):
           f" | {phi:.1f} | {c:.1f} | {ffc} | {1e-3*tau_each[0]:.1f} -> {1e-3*tau_each[-1]:.1f} | {(j['cpu_time_s'] if 'cpu_time_s' in j else j['wall_time_s'])/60:.0f} |")
     with open(os.path.join(tmp, f"{k}.dat"), "w") as f:
         for x, t in zip(xs, ys): f.write(f"{x} {t}\n")
-    plots.append((k, name, m, c, phi))
+    plots.append((k, group, name, m, c, phi))
 print()
+key = {}  # group -> its key entry in the figure
 for g, v in groups.items():
     sd = statistics.stdev(v) if len(v) > 1 else float("nan")
     print(f"{g}: phi_lin mean {statistics.mean(v):.1f} deg, std {sd:.1f} deg, min {min(v):.1f}, max {max(v):.1f} (n = {len(v)})")
-xmax = 1.15 * max(max(1e-3 * float(p["sigma"]) for p in csv.DictReader(open(os.path.join(r, "shear_points.csv")))) for r in runs)
+    key[g] = f"{g}: phi_lin {statistics.mean(v):.1f}" + (f" +- {sd:.1f}" if len(v) > 1 else "") + f" deg (n = {len(v)})"
+xmax = 1.15 * smax
 cmds = []
 # Up to eight runs of one group: a colour and a key entry each. More runs, or several groups
 # (fillings of the reduced cell beside the annulus'): a colour and a point type per group and
@@ -70,15 +74,12 @@ cmds = []
 by_group = len(groups) > 1 or len(plots) > 8
 order = list(groups)
 titled = set()
-for k, name, m, c, phi in plots:
+for k, g, name, m, c, phi in plots:
     if by_group:
-        g = name.split("/")[0]
         gi = order.index(g)
-        v = groups[g]
-        sd = f" +- {statistics.stdev(v):.1f}" if len(v) > 1 else ""
-        title = f"t '{g}: phi_lin {statistics.mean(v):.1f}{sd} deg (n = {len(v)})'" if g not in titled else "notitle"
+        title = f"t '{key[g]}'" if g not in titled else "notitle"
         titled.add(g)
-        cmds.append(f"'{tmp}/{k}.dat' w p pt {(7, 5, 9, 11, 13)[gi % 5]} lc {gi + 1} {title}")
+        cmds.append(f"'{tmp}/{k}.dat' w p pt {MARK[gi % 5]} lc {gi + 1} {title}")
         cmds.append(f"{m}*x+{c} w l lc {gi + 1} notitle")
     else:
         cmds.append(f"'{tmp}/{k}.dat' w p pt 7 lc {k+1} t '{name}: {phi:.1f} deg'")
@@ -94,17 +95,18 @@ subprocess.run(["gnuplot"], input=gp, text=True, check=True)
 print("figure:", png)
 if ff_png:
     # The flow function: each run's (sigma_1, sigma_c), a filled marker at each group's mean.
-    cmds, top = [], 0.0
+    cmds, top, inline = [], 0.0, ""
     for gi, (g, v) in enumerate(flow.items()):
         with open(os.path.join(tmp, f"ff{gi}.dat"), "w") as f:
             for x, yv in v: f.write(f"{x} {yv}\n")
         mx, my = statistics.mean(x for x, _ in v), statistics.mean(yv for _, yv in v)
         print(f"flow function, {g}: mean sigma_1 {mx:.1f} kPa, mean sigma_c {my:.1f} kPa, ratio {mx / my:.2f} (n = {len(v)})")
         top = max(top, max(x for x, _ in v))
-        cmds.append(f"'{tmp}/ff{gi}.dat' w p pt {(6, 4, 8, 10, 12)[gi % 5]} lc {gi + 1} "
+        cmds.append(f"'{tmp}/ff{gi}.dat' w p pt {MARK[gi % 5] - 1} lc {gi + 1} "
                     f"t '{g}: sigma_1 {mx:.0f} kPa, sigma_c {my:.0f} kPa, ffc {mx / my:.2f} (n = {len(v)})'")
-        cmds.append(f"'-' w p pt {(7, 5, 9, 11, 13)[gi % 5]} ps 2 lc {gi + 1} notitle")
-    inline = "".join(f"{statistics.mean(x for x, _ in v)} {statistics.mean(yv for _, yv in v)}\ne\n" for v in flow.values())
+        cmds.append(f"'-' w p pt {MARK[gi % 5]} ps 2 lc {gi + 1} notitle")
+        inline += f"{mx} {my}\ne\n"  # the mean, read by that '-'
+
     xr = 1.15 * top
     lines = ", ".join(f"x / {k} w l dt 2 lc rgb 'gray' notitle" for k in (1, 2, 4, 10))
     # Jenike's classes between the lines: ffc < 1 not flowing, 1-2 very cohesive, 2-4 cohesive,
