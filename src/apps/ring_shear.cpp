@@ -596,11 +596,15 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     eval_error = e.what();
   }
   const double deg = 180.0 / M_PI;
+  // ffc in summary.json: a number, "inf" without cohesion, null without a steady-state circle.
+  const auto ffc_json = [](const YieldLocusResult& y) {
+    return !y.steady_state ? nlohmann::json(nullptr) : y.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(y.ffc);
+  };
   try {
     const YieldLocusResult raw = evaluate_yield_locus({sp, tp}, other_pts, mean_density, true);
     auto& o = j[r.normalize_points ? "yield_locus_measured_points" : "yield_locus_normalized_points"];
     o = {{"phi_lin_deg", raw.phi_lin * deg}, {"cohesion", raw.cohesion}, {"sigma_c", raw.sigma_c},
-         {"ffc", !raw.steady_state ? nlohmann::json(nullptr) : raw.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(raw.ffc)}};
+         {"ffc", ffc_json(raw)}};
     if (!raw.steady_state) o["steady_state_error"] = raw.steady_state_error;
   } catch (const std::invalid_argument& e) {
     j[r.normalize_points ? "yield_locus_measured_points" : "yield_locus_normalized_points"] = {{"error", e.what()}};
@@ -610,7 +614,7 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
     const auto circ = [&](double v) { return yl.steady_state ? nlohmann::json(v) : nlohmann::json(nullptr); };
     j["yield_locus"] = {{"phi_lin_deg", yl.phi_lin * deg}, {"cohesion", yl.cohesion}, {"r_squared", yl.r_squared},
                         {"sigma_1", circ(yl.sigma_1)}, {"sigma_2", circ(yl.sigma_2)}, {"sigma_c", yl.sigma_c},
-                        {"ffc", !yl.steady_state ? nlohmann::json(nullptr) : yl.ffc_infinite ? nlohmann::json("inf") : nlohmann::json(yl.ffc)},
+                        {"ffc", ffc_json(yl)},
                         {"phi_e_deg", circ(yl.phi_e * deg)}, {"phi_sf_deg", yl.phi_sf * deg},
                         {"preshear_above_locus", yl.preshear_above_locus}};
     if (!yl.steady_state) {
