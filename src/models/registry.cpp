@@ -40,10 +40,11 @@ Factory fixed_rolling(const std::string& name) {
 template <class N, class D, class T, class W = NoTwisting>
 Factory with_rolling(const std::string& name) {
   return [name](const std::string& rolling) -> std::unique_ptr<ContactModel> {
-    if (rolling == "none") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, NoRolling, W>>>(name);
-    if (rolling == "epsd") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, EpsdRolling, W>>>(name);
-    if (rolling == "cdt") return std::make_unique<ContactModelImpl<ContactLaw<N, D, T, CdtRolling, W>>>(name);
-    if (rolling == "sds") return make_sds_law<N, D, T, W>(name);  // compiled in registry_sds.cpp
+    // Each compiled in registry_<rolling>.cpp (registry_laws.hpp).
+    if (rolling == "none") return make_law<N, D, T, NoRolling, W>(name);
+    if (rolling == "epsd") return make_law<N, D, T, EpsdRolling, W>(name);
+    if (rolling == "cdt") return make_law<N, D, T, CdtRolling, W>(name);
+    if (rolling == "sds") return make_law<N, D, T, SdsRolling, W>(name);
     return nullptr;
   };
 }

@@ -2,7 +2,8 @@
 // rolling choice ("none", "epsd", "cdt", "sds") select one compiled ContactLaw. The choice is made
 // once per run, never per pair. To add a model: write its sub-model header(s), then add one
 // row to COHDEM_ROLLING_LAWS (registry_laws.hpp), or to registry.cpp's table for a law whose
-// rolling slot is its own (Walton).
+// rolling slot is its own (Walton). A rolling model: its header, a registry_<name>.cpp like
+// registry_epsd.cpp, and its line in registry.cpp's with_rolling.
 #pragma once
 #include <memory>
 #include <string>

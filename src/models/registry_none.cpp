@@ -1,0 +1,5 @@
+// The presets of COHDEM_ROLLING_LAWS with rolling = "none" (NoRolling), compiled in a file of
+// their own (registry_laws.hpp says why).
+#include "models/registry_instance.hpp"
+
+COHDEM_INSTANTIATE_ROLLING(NoRolling)
