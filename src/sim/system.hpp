@@ -236,8 +236,11 @@ class System {
     std::vector<uint32_t> k;
     std::vector<uint8_t> live;
     std::vector<std::byte> rec;
-    void take(const HistoryArray& h);
+    /// On `threads` threads (each scans a contiguous range of entries into its own part,
+    /// the parts then joined in order: the same result on any number).
+    void take(const HistoryArray& h, int threads = 1);
     void restore(HistoryArray& h) const;
+    std::vector<SparseHistory> parts_;  ///< take's per-thread parts (kept for their capacity)
   };
   /// step_pair's way back: the moved state and the contact history at a step after the
   /// lists' last build, from which pairs alone led to the present.
