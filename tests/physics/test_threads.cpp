@@ -839,3 +839,26 @@ TEST(Threads, KineticEnergyIsTheSameSumOnAnyThreadCount) {
   EXPECT_EQ(std::memcmp(&e[0], &e[2], sizeof(double)), 0) << e[0] << " " << e[2];
   EXPECT_NEAR(e[0] / double(exact), 1.0, 1e-12);
 }
+
+// The live contacts (every series row and progress line) are counted on the threads where
+// the lists are long: the same count as one thread's, the flags counted here, on one, two
+// and three threads (a million entries, so that threads that raced on the sum would lose
+// some of it).
+TEST(Threads, LiveContactsAreCountedOnAnyThreadCount) {
+  NeighborList nl;
+  nl.parallel_min = 0;
+  Rng rng(5);
+  nl.hist.live.resize(1000003);
+  nl.whist.live.resize(5003);
+  size_t expected = 0;
+  for (auto* v : {&nl.hist.live, &nl.whist.live})
+    for (uint8_t& l : *v) {
+      l = rng.uniform() < 0.3 ? 1 : 0;
+      expected += l;
+    }
+  for (int t = 1; t <= 3; ++t) {
+    omp_set_num_threads(t);
+    for (int repeat = 0; repeat < 5; ++repeat) EXPECT_EQ(nl.live_contacts(), expected) << t << " threads";
+  }
+  omp_set_num_threads(1);
+}
