@@ -215,11 +215,20 @@ void check_finite(const System& s) {
   const ParticleStore& P = s.particles;
   // The first such particle, found on the threads (every series row checks: at 10^6
   // particles a few ms on one thread).
+  // Below parallel_min without entering an OpenMP region (a team of one still costs its set-up).
   const long n = long(P.size());
+  auto finite = [&](const long i) {
+    return std::isfinite(P.x[i].x + P.x[i].y + P.x[i].z + P.v[i].x + P.v[i].y + P.v[i].z);
+  };
   long bad = n;
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > s.cfg.parallel_min)
-  for (long i = 0; i < n; ++i)
-    if (!std::isfinite(P.x[i].x + P.x[i].y + P.x[i].z + P.v[i].x + P.v[i].y + P.v[i].z)) bad = std::min(bad, i);
+  if (n > s.cfg.parallel_min) {
+#pragma omp parallel for schedule(static) reduction(min : bad)
+    for (long i = 0; i < n; ++i)
+      if (!finite(i)) bad = std::min(bad, i);
+  } else {
+    for (long i = 0; i < n && bad == n; ++i)
+      if (!finite(i)) bad = i;
+  }
   if (bad < n) {
     const size_t i = size_t(bad);
     throw RunError("particle " + std::to_string(P.id[i]) + " has a non-finite position or velocity at step " +

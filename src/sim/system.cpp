@@ -454,17 +454,13 @@ void System::SparseHistory::take(const HistoryArray& h, const int threads) {
   }
   // The scan reads every record (hundreds of MB at 10^6 particles, a few ms a thread); the
   // kept ones (live contacts: about 0.1-0.5 a particle) are few, and joined in order.
-  parts_.resize(size_t(threads));
+  std::vector<SparseHistory> parts(static_cast<size_t>(threads));
 #pragma omp parallel num_threads(threads)
   {
     const size_t nt = size_t(omp_get_num_threads()), t = size_t(omp_get_thread_num());
-    SparseHistory& part = parts_[t];
-    part.k.clear();
-    part.live.clear();
-    part.rec.clear();
-    scan(n * t / nt, n * (t + 1) / nt, part);
+    scan(n * t / nt, n * (t + 1) / nt, parts[t]);
   }
-  for (const SparseHistory& part : parts_) {
+  for (const SparseHistory& part : parts) {
     k.insert(k.end(), part.k.begin(), part.k.end());
     live.insert(live.end(), part.live.begin(), part.live.end());
     rec.insert(rec.end(), part.rec.begin(), part.rec.end());

@@ -240,7 +240,6 @@ class System {
     /// the parts then joined in order: the same result on any number).
     void take(const HistoryArray& h, int threads = 1);
     void restore(HistoryArray& h) const;
-    std::vector<SparseHistory> parts_;  ///< take's per-thread parts (kept for their capacity)
   };
   /// step_pair's way back: the moved state and the contact history at a step after the
   /// lists' last build, from which pairs alone led to the present.
