@@ -1,20 +1,20 @@
 // Large allocations on transparent huge pages (Linux): the global operator new is replaced
 // so that the whole 2 MiB pages inside every block of 2 MiB or more are marked MADV_HUGEPAGE
-// before the block is first touched. Debian's and most
-// distributions' kernels give huge pages only to memory so marked (the "madvise" setting of
+// before the block is first touched. Debian's and most distributions' kernels give huge
+// pages only to memory so marked (the "madvise" setting of
 // /sys/kernel/mm/transparent_hugepage/enabled); with "always" the mark changes nothing, with
 // "never" the kernel ignores it.
 //
-// Why: at 10^6 particles every array of the step is tens of MiB and the force loop reads the
+// Why: at 10^6 particles the step's arrays are 4-24 MiB each and the force loop reads the
 // partners' records a plane of cells ahead. With 4 KiB pages each such read can also miss
 // the TLB; with 2 MiB pages the page walks all but vanish. Measured on the 10^6 gas
 // (docs/performance-history.md, sixtieth round): 1.02x on two threads, no change on one, the
-// same bits. Small blocks (the 10^4 gas's arrays, the lists of a ring shear cell) are left to
-// malloc as before.
+// same bits. Small blocks (the 10^4 gas's arrays, the lists of a ring shear cell) are left as
+// malloc gives them.
 //
-// COHDEM_THP=0 in the environment turns it off (for comparisons): every block then comes
-// from malloc. Linked into the cohdem program, its tests and its benchmarks (CMakeLists.txt),
-// not into the library: a program that embeds cohdem keeps its own allocator.
+// COHDEM_THP=0 in the environment turns it off (for comparisons): no block is marked. Linked
+// into the cohdem program, its tests and its benchmarks (CMakeLists.txt), not into the
+// library: a program that embeds cohdem keeps its own allocator.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
