@@ -645,8 +645,13 @@ double System::kinetic_energy() const {
   };
   if (nb <= 1) return nb == 1 ? block(0) : 0.0;
   std::vector<double> part(nb);
-#pragma omp parallel for schedule(static) if (long(n) > cfg.parallel_min)
-  for (long b = 0; b < long(nb); ++b) part[size_t(b)] = block(size_t(b));
+  // Below parallel_min without entering an OpenMP region, as check_finite and live_contacts.
+  if (long(n) > cfg.parallel_min) {
+#pragma omp parallel for schedule(static)
+    for (long b = 0; b < long(nb); ++b) part[size_t(b)] = block(size_t(b));
+  } else {
+    for (size_t b = 0; b < nb; ++b) part[b] = block(b);
+  }
   double e = 0;
   for (const double x : part) e += x;
   return e;
