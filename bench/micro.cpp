@@ -455,10 +455,9 @@ void BM_CaseScreen(benchmark::State& st) {
   }
   const NeighborList& nl = s->nl;
   const long n = long(s->particles.size());
-  std::vector<Vec3> force(static_cast<size_t>(n)), torque(static_cast<size_t>(n));  // the rows' sums, zeroed by the screening
   const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
   const ScreenInput in{nl.start.data(), nl.jdx.data(), nl.image.data(), nl.hist.live.data(), nl.shift.data(),
-                       s->particles.x.data(), s->particles.radius.data(), force.data(), torque.data(), entries};
+                       s->particles.x.data(), s->particles.radius.data(), entries};
   using Fn = uint32_t (*)(const ScreenInput&, long, long, long, uint32_t, uint32_t, ScreenHits&);
   auto sweep = [&](const Fn fn) {  // the kernel's batching (force_kernel.hpp, sweep and batch_end)
     static ScreenHits hits;

@@ -32,7 +32,7 @@ struct ParticleStore {
   std::vector<double> radius;           ///< current radius, m
   std::vector<double> mass, inertia;    ///< kg, kg m^2 (solid sphere 2/5 m r^2)
   std::vector<Vec3> x, v, omega;        ///< position m, velocity m/s, angular velocity rad/s
-  std::vector<Vec3> force, torque;      ///< N, N m (contact + body forces, this step)
+  std::vector<Vec3> force, torque;      ///< N, N m (contact + body forces, this step; a free particle's not stored by a fused force call: ForceContext::open_dt)
   // The thermal fields: one entry per particle once enable_thermal() has run (a run with a
   // thermal model), empty otherwise (24 bytes per particle that a purely mechanical run
   // would carry, write to checkpoints and permute at every re-sort for nothing).

@@ -16,9 +16,7 @@ struct FinishFree {
   Vec3* x;
   Vec3* v;
   Vec3* omega;
-  Vec3* force;   ///< the row sums in, the particle's force out
-  Vec3* torque;  ///< the same for the torque
-  PairResult* rev;  ///< the reverse sums of local particles, read and zeroed
+  PairResult* rev;  ///< the particles' sums of all their pairs (one accumulator a particle), read and zeroed
   const double* mass;
   const double* inertia;
   const uint8_t* flag;
@@ -31,8 +29,9 @@ struct FinishFree {
 
 /// Finishes the particles [i, e) four at a time, from i on, as long as all four of a group
 /// are free and have no wall entries, as the scalar finish does for a local particle: its
-/// reverse sums added to its row sums (and zeroed), gravity, the closing half-kick, the next
-/// step's opening half-kick and drift, and the drift since the build into d. Returns the
+/// pair sums (then zeroed) plus gravity, the closing half-kick, the next step's opening
+/// half-kick and drift, and the drift since the build into d. The force and torque are not
+/// stored (a fused call's free particles': ForceContext::open_dt). Returns the
 /// first particle it did not finish (a group it may not take, or fewer than four left).
 /// x86-64 with AVX2 only: call it only when screen_avx2_enabled().
 long finish_free_avx2(const FinishFree& f, long i, long e, Drift& d);

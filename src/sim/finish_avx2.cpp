@@ -41,8 +41,6 @@ __attribute__((target("avx2"))) long finish_free_avx2(const FinishFree& f, long 
   double* const __restrict x = &f.x[0].x;
   double* const __restrict v = &f.v[0].x;
   double* const __restrict w = &f.omega[0].x;
-  double* const __restrict force = &f.force[0].x;
-  double* const __restrict torque = &f.torque[0].x;
   double* const __restrict rev = &f.rev[0].f.x;
   const double* const __restrict ref = &f.ref[0].x;
   const double* const __restrict mass = f.mass;
@@ -74,24 +72,15 @@ __attribute__((target("avx2"))) long finish_free_avx2(const FinishFree& f, long 
     const __m256d rt1 = join(_mm_loadu_pd(rp + 10), _mm_loadu_pd(rp + 15));
     const __m256d rt2 = join(pair(rp + 17, rp + 21), _mm_loadu_pd(rp + 22));
     for (int k = 0; k < 6; ++k) _mm256_storeu_pd(rp + 4 * k, zero);
-    // F = force + R + grav m, T = torque + RT: the particles' final force and torque.
+    // F = R + grav m, T = RT: the particles' final force and torque (R holds the sums of
+    // all their pairs, their own rows' included). Used by the kicks and not stored: in a
+    // fused call nothing reads a free particle's force afterwards (ForceContext::open_dt).
     const __m256d m = _mm256_loadu_pd(mass + i);
     const Spread ms = spread(m);
-    __m256d F0 = _mm256_add_pd(_mm256_loadu_pd(force + o), rf0);
-    __m256d F1 = _mm256_add_pd(_mm256_loadu_pd(force + o + 4), rf1);
-    __m256d F2 = _mm256_add_pd(_mm256_loadu_pd(force + o + 8), rf2);
-    F0 = _mm256_add_pd(F0, _mm256_mul_pd(g0, ms.a));
-    F1 = _mm256_add_pd(F1, _mm256_mul_pd(g1, ms.b));
-    F2 = _mm256_add_pd(F2, _mm256_mul_pd(g2, ms.c));
-    const __m256d T0 = _mm256_add_pd(_mm256_loadu_pd(torque + o), rt0);
-    const __m256d T1 = _mm256_add_pd(_mm256_loadu_pd(torque + o + 4), rt1);
-    const __m256d T2 = _mm256_add_pd(_mm256_loadu_pd(torque + o + 8), rt2);
-    _mm256_storeu_pd(force + o, F0);
-    _mm256_storeu_pd(force + o + 4, F1);
-    _mm256_storeu_pd(force + o + 8, F2);
-    _mm256_storeu_pd(torque + o, T0);
-    _mm256_storeu_pd(torque + o + 4, T1);
-    _mm256_storeu_pd(torque + o + 8, T2);
+    const __m256d F0 = _mm256_add_pd(rf0, _mm256_mul_pd(g0, ms.a));
+    const __m256d F1 = _mm256_add_pd(rf1, _mm256_mul_pd(g1, ms.b));
+    const __m256d F2 = _mm256_add_pd(rf2, _mm256_mul_pd(g2, ms.c));
+    const __m256d T0 = rt0, T1 = rt1, T2 = rt2;
     // The closing half-kick, then the opening one and the drift: v + F hm + F hm, x + v dt.
     const Spread hm = spread(_mm256_div_pd(kh, m));
     const Spread hI = spread(_mm256_div_pd(kh, _mm256_loadu_pd(inertia + i)));

@@ -45,6 +45,18 @@ struct PairResult {
 /// live: the same sums as skipping the dead ones.
 inline constexpr PairResult kNoPair{Vec3{0.0, 0.0, 0.0}, Vec3{-0.0, -0.0, -0.0}};
 
+/// Where the own-row results of a particle not local to its piece are kept (it depends on
+/// rows before the piece, so its sums are completed by a gather, after which its own row's
+/// results are added, in list order): `count` records from `first` in the own-row buffer of
+/// the thread that swept its row (PairSlots::OwnStore), each the force and torque on i of a
+/// live entry, in PairResult's f and tj. Local particles take their own results straight
+/// into their reverse sums instead, after the pairs of the rows before (one accumulator a
+/// particle: the same operations in the same order). count is 0 between force calls (the
+/// finish that reads it resets it).
+struct OwnAt {
+  uint32_t first = 0, count = 0;
+};
+
 /// The force loop's split of n particles over nt threads without a PairSlots (whose plan()
 /// splits by work): thread t sweeps [n t/nt, n (t+1)/nt).
 COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
@@ -196,6 +208,17 @@ struct PairSlots {
   /// three lists of at most `span` each (the first step's head and tail, the second
   /// step's tail; force_kernel.hpp), kept from call to call.
   std::vector<DeferList> pieces;
+  /// Per thread, during a force evaluation: the own-row results of the particles its sweep
+  /// met that are not local to their piece (those of its block's head, and in a two-step
+  /// call of its tail's first `span` rows; OwnAt), in the order they came, kept from call to
+  /// call. Each thread sizes and writes its own (a cache line or more each: alignas) before
+  /// the hand-off or barrier after which another thread may read it.
+  struct alignas(64) OwnStore {
+    std::vector<PairResult> buf;
+  };
+  std::vector<OwnStore> own_rows;
+  /// Per particle: where its own-row results are (OwnAt; all counts 0 between calls).
+  std::vector<OwnAt> own_at;
   /// Numbers a two-step call on nt threads and makes room for it (set-up, before the
   /// parallel region; out of line).
   [[gnu::noinline]] uint64_t next_pair_call(long nt) {
@@ -272,6 +295,8 @@ struct PairSlots {
   /// At the wrap the records are cleared, so that no record keeps a number that a later
   /// call gets (a record not written for 2^32 calls, the barrier taken meanwhile).
   uint32_t next_epoch(long nt) {
+    if (own_rows.size() < size_t(nt)) own_rows.resize(size_t(nt));
+    if (own_at.size() < size_t(n)) own_at.resize(size_t(n));
     if (hand_n < size_t(nt)) {
       hand = std::make_unique<HandOff[]>(size_t(nt));
       hand_n = size_t(nt);
@@ -549,12 +574,14 @@ struct ForceContext {
   const std::vector<Wall>& walls;
   double dt = 0, t = 0;
   // Per-pair results (indexed like nl.jdx), valid where nl.hist.live[k]; i's side is summed
-  // straight into particle i.
+  // straight into i's sums (rev).
   std::vector<PairResult>& pair;
-  /// Per particle: the sums of the pairs where it is j (force, torque), scattered during the
-  /// row sweep by the one thread that holds all of its pairs (force_kernel.hpp, "local").
-  /// At least as long as the particle arrays and all zero between calls: the kernel resets
-  /// each entry when it reads it (a new buffer must start zeroed).
+  /// Per particle: the sums of all its pairs (force, torque; one accumulator a particle),
+  /// those where it is j first, in ascending list order, then those of its own row, in list
+  /// order; added to during the row sweep by the one thread that holds all of its pairs
+  /// (force_kernel.hpp, "local"; the others' are gathered). At least as long as the particle
+  /// arrays and all zero between calls: the kernel resets each entry when it reads it (a new
+  /// buffer must start zeroed).
   std::vector<PairResult>& rev;
   // Per wall entry: force on the particle, moment on the wall about the contact point,
   // contact point; valid where nl.whist.live[e].
@@ -576,6 +603,9 @@ struct ForceContext {
   /// same order, so results are bit-identical to the unfused step. Particles attached to
   /// walls are left to that pass. The state after the call is then mid-step. Only for
   /// particles whose radii are as at the list build (no thermal model: System::step_once).
+  /// A free particle's force and torque are then not stored in ParticleStore::force and
+  /// torque (the kicks use them; the next step's opening is done, and what reads them, the
+  /// outputs and checkpoints, runs only after an unfused call: System::mid_step()).
   double open_dt = 0;
   Drift* drift = nullptr;
   /// When not null (needs the fused opening and no recording; on several threads a PairSlots

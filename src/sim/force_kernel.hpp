@@ -5,12 +5,15 @@
 //   free screening, a batch of kBatch entries of consecutive rows at a time; scalar, or four
 //   entries at a time in AVX2 registers where the CPU has them: sim/screen.hpp), then evaluated
 //   (one loop over the batch's contacts; for the laws that have them, four contacts at a time
-//   in AVX2 lanes, sim/lanes.hpp, with the same results); the forces and torques on i are summed in list order
-//   straight into particle i, and what j receives (the force on i, whose opposite j takes,
-//   and the torque on j) goes to per-pair buffers (one thread: only when asked for,
-//   ForceContext::keep_pair; the row sweep scatters j's share itself).
-// Pass 2 (particle i): sums the pair results where i is j on their own, in ascending list
-//   order, adds that to i's own row sum, then i's wall contacts, then the body force; when
+//   in AVX2 lanes, sim/lanes.hpp, with the same results). Each particle has one accumulator
+//   (ForceContext::rev): what j receives (the opposite of the force on i, and the torque on
+//   j) is added to j's, and then, when row i comes, the forces and torques on i to i's, both
+//   in list order, so i's sums are those of its pairs in the rows before, then its own row's
+//   (sixty-first round). Pairs whose particle is near a block boundary are stored instead and
+//   gathered in the same order (below).
+// Pass 2 (particle i): takes i's sums (gathered, for a particle near a block boundary: the
+//   pairs where i is j in ascending list order, then its own row's results, OwnAt), then i's
+//   wall contacts, then the body force; when
 //   asked (ForceContext::kick_h), it then gives i's velocities velocity Verlet's closing
 //   half-kick, no row read after pass 2 of i using them, and, when asked too
 //   (ForceContext::open_dt), the next step's opening half-kick and drift. With that fused
@@ -24,12 +27,12 @@
 // of their pairs) are finished by that block's thread after its sweep, handed over once
 // their own rows are done (PairSlots::HandOff: no barrier); where the blocks are too short
 // for that (PairSlots::chained), all threads meet at a barrier and share them out. The row
-// sweep scatters j's share straight into j's reverse sums
-// (in ascending list order) when all of j's pairs lie in the sweeping thread's block
-// (always, on one thread); pairs of particles near a block boundary store their results,
-// gathered through the transposed index in the same order. Only WHEN and on which thread
-// pass 2 runs, and how the reverse sums are collected, depend on the thread count, never
-// what is summed or in which order. With ForceContext::drift2, the next step runs in the
+// sweep adds into a particle's accumulator when all of its pairs lie in the sweeping
+// thread's block (always, on one thread); a particle near a block boundary has j's share of
+// its pairs stored per pair (gathered through the transposed index in the same order) and
+// its own row's results kept in order apart (PairSlots::own_rows), added after them. Only
+// WHEN and on which thread pass 2 runs, and how the sums are collected, depend on the thread
+// count, never what is summed or in which order. With ForceContext::drift2, the next step runs in the
 // same sweep, a second cursor following the first in each thread's block (System::step_pair;
 // on several threads each block is swept as two pieces, its tail first: two_steps below).
 #pragma once
@@ -176,9 +179,18 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
   // The call's number for the chained finishing's hand-offs (PairSlots::HandOff).
   uint32_t epoch = 0;
   uint64_t pcall = 0;  // and for the stages of a two-step call (PairSlots::Stage)
+  // Where the own-row results of particles not local to their piece are (OwnAt): the
+  // PairSlots' (sized by next_epoch), or the call's own without one.
+  OwnAt* own_at = nullptr;
+  std::vector<OwnAt> own_at_plain;
+  if (parallel && c.slots == nullptr) {
+    own_at_plain.resize(size_t(n));
+    own_at = own_at_plain.data();
+  }
   if (nt_plan > 1 && c.slots != nullptr) {
     setup_slots(nt_plan);
     epoch = c.slots->next_epoch(nt_plan);
+    own_at = c.slots->own_at.data();
     if (two) pcall = c.slots->next_pair_call(nt_plan);
   }
   // The region's body is a function of its own (`region`), run by every thread of the
@@ -217,24 +229,28 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       {
         setup_slots(nt);
         epoch = c.slots->next_epoch(nt);
+        own_at = c.slots->own_at.data();
         if (two) pcall = c.slots->next_pair_call(nt);
       }  // implicit barrier: every thread sees the blocks, res, slot_of, the lists and epoch
     }
     auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
       return local_to_block(dep_lo, q, a, b);
     };
+    // This thread's own-row buffer and the results in it (OwnAt; set up below).
+    PairResult* own_buf = nullptr;
+    uint32_t own_used = 0;
 
     // Pass 1 of the list entries [kb, ke) (at most kBatch), which belong to the rows [i0, i1]
     // in block [a, b): the entries that touch or are live are picked first, without branches
     // (most entries are not in contact: the skin), so the loads of all entries overlap and no
     // branch mispredicts; then they are evaluated in one loop that runs across rows, so the
     // work of one contact overlaps with the next (several rows hold one or no contact). A row
-    // longer than a batch is split over several; each row's sums start at zero where its first
-    // entry is, and are added to in list order.
+    // longer than a batch is split over several; its results go to the sums in list order,
+    // whichever batch they come in.
     auto batch = [&]<bool kAllLocal>(const long i0, const long i1, const uint32_t kb, const uint32_t ke,
                                      const long a, const long b) __attribute__((always_inline)) {
       ScreenHits hits;  // no zero fill
-      const ScreenInput scr{start, jdx, image, live, shift, x, radius, force, torque, entries};
+      const ScreenInput scr{start, jdx, image, live, shift, x, radius, entries};
       const uint32_t nh =
           wide   ? screen_avx512(scr, i0, i1, b, kb, ke, hits)
           : simd ? screen_avx2(scr, i0, i1, b, kb, ke, hits)
@@ -260,8 +276,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       constexpr uint32_t D = 8;
       if (pref)
         for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
-      // One contact's result into the sums: the force and torque on i into i's row sum, j's
-      // share into its reverse sums or the per-pair buffer, in list order.
+      // One contact's result into the sums, in list order: the force and torque on i into
+      // i's reverse sums (one accumulator a particle: its pairs of the rows before are in it
+      // already), or, where i is not local to the piece, appended to the thread's own-row
+      // results (OwnAt: a row's results come one after another; the finish adds them after
+      // the gather that completes i's sums); j's share into its reverse sums or the per-pair
+      // buffer.
       // reset: the contact's history is reset here where it ended (the lanes leave that to
       // this branch, which every contact takes anyway; the scalar law resets it itself).
       auto put = [&](const uint32_t k, const uint32_t i, const uint32_t j, const bool alive, const Vec3& f,
@@ -273,8 +293,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           // A slot (j not local) of a pair not in contact holds kNoPair (PairSlots::of).
           if (!kAllLocal && slot_of != nullptr && !local(j, a, b)) res[slot_of[k]] = kNoPair;
         } else {
-          force[i] += f;
-          torque[i] += ti;
+          if (kAllLocal || local(i, a, b)) {
+            rev[i].f += f;
+            rev[i].tj += ti;
+          } else {
+            OwnAt& o = own_at[i];
+            o.first = own_used - o.count;  // the row's first result (no branch)
+            ++o.count;
+            own_buf[own_used++] = {f, ti};
+          }
           if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
             rev[j].f -= f;
             rev[j].tj += tj;
@@ -352,11 +379,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // Pass 2 of particle i (needs pass 1 of every row that holds a pair of i). kLocal: i is
     // known to be local to [a, b) (one thread; or finished during the sweep, which finishes
     // only particles whose rows all lie in its block), so the test is left out.
-    auto finish = [&]<bool kLocal>(const long i, const long a, const long b, Drift& drift)
+    // ob: the own-row buffer of the thread that swept i's row (read where i is not local to
+    // the piece [a, b)).
+    auto finish = [&]<bool kLocal>(const long i, const long a, const long b, Drift& drift, const PairResult* ob)
                       __attribute__((always_inline)) {
-      // The pairs where i is j, summed on their own in ascending list order (the order of
-      // rpair, and the order in which the row sweep scatters them), then added to i's own row
-      // sum: the same operations whichever way they were collected.
+      // The pairs where i is j, summed in ascending list order (the order of rpair, and the
+      // order in which the row sweep scatters them), then the results of i's own row, in list
+      // order: the same operations whichever way they were collected. A local particle's
+      // reverse sums hold both already (put); another's are gathered here.
       Vec3 R, RT;
       if (kLocal || local(uint32_t(i), a, b)) {
         R = rev[i].f;
@@ -386,7 +416,17 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
           }
         }
       }
-      Vec3 F = force[i] + R, T = torque[i] + RT;
+      if (!(kLocal || local(uint32_t(i), a, b))) {
+        // i's own row: its live entries' results, in list order (OwnAt), then reset.
+        OwnAt& o = own_at[i];
+        const PairResult* const r = ob + o.first;
+        for (uint32_t q = 0; q < o.count; ++q) {
+          R += r[q].f;
+          RT += r[q].tj;
+        }
+        o.count = 0;
+      }
+      Vec3 F = R, T = RT;
       // The wall contacts, out of line: rare on most rows, and inline they would keep F and T
       // in stack memory for every particle (the register allocator spills them around the
       // loop's body).
@@ -398,8 +438,12 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       }
       const bool free_i = flag[i] == kFree;
       if (free_i) F += grav * mass[i];
-      force[i] = F;
-      torque[i] = T;
+      // Stored, except a free particle's in a fused call (its kicks use them here, and
+      // nothing reads them before the next call: ForceContext::open_dt).
+      if (!(free_i && kick_h > 0 && open_dt > 0)) {
+        force[i] = F;
+        torque[i] = T;
+      }
       // Every row that holds a pair of i is done (that is when finish runs): i's velocities
       // are not read again in this call, and its force is final.
       // The kicks and the drift work on registers and store each result once: a vector
@@ -424,7 +468,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // The finish of free particles four at a time (finish.hpp): with the fused opening, where
     // the AVX2 paths run.
     const bool vec_finish = simd && kick_h > 0 && open_dt > 0;
-    const FinishFree ff{x, v, omega, force, torque, rev, mass, inertia, flag, wstart,
+    const FinishFree ff{x, v, omega, rev, mass, inertia, flag, wstart,
                         vec_finish ? nl.reference().x.data() : nullptr, grav, kick_h, open_dt};
     // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
     auto block = [&](const long t) __attribute__((always_inline)) {
@@ -450,16 +494,31 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         while (next < i) {
           next = finish_free_avx2(ff, next, i, d);
           for (const long stop = std::min(i, next + 4); next < stop; ++next)
-            finish.template operator()<true>(next, a, b, d);
+            finish.template operator()<true>(next, a, b, d, nullptr);
         }
       }
-      for (; next < i; ++next) finish.template operator()<true>(next, a, b, d);
+      for (; next < i; ++next) finish.template operator()<true>(next, a, b, d, nullptr);
       return next;
     };
     // The block's head: the rows whose particles can depend on an earlier block, those within
     // PairSlots::span of its start (i - dep_lo[i] <= span for every i); without a PairSlots,
     // any.
     const long head_end = share ? std::min(b, a + c.slots->span) : b;
+    // This thread's own-row results (OwnAt) of the rows whose particles may not be local
+    // to their piece: its block's head, and in a two-step call its tail's first `span` rows,
+    // at most one result an entry of those rows a step. One thread: none (every particle is
+    // local).
+    std::vector<PairResult> own_plain;  // several threads without a PairSlots
+    if (nt > 1) {
+      size_t cap = start[head_end] - start[a];
+      if (two) {
+        const long tb = c.slots->tail(tid);
+        cap = 2 * (cap + (start[std::min(b, tb + c.slots->span)] - start[tb]));
+      }
+      std::vector<PairResult>& store = share ? c.slots->own_rows[size_t(tid)].buf : own_plain;
+      if (store.size() < cap) store.resize(cap);
+      own_buf = store.data();
+    }
     Drift drift;  // this thread's share of the fused opening's displacements (exact merge)
     // next: the first particle of the block not yet finished or deferred. No particle depends
     // on a later row than its own, so every particle of the block is finished or deferred by
@@ -483,7 +542,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         // the block's first `span` rows can fail (head_end; one thread: none).
         for (const long h = std::min(i, head); next < h; ++next) {
           if (long(dep_lo[next]) >= a)
-            finish.template operator()<true>(next, a, b, drift);
+            finish.template operator()<true>(next, a, b, drift, nullptr);
           else
             defer(next);
         }
@@ -569,7 +628,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         if constexpr (!kAllLocal) {
           for (const long h = std::min(i1, head); C.next < h; ++C.next) {
             if (long(dep_lo[C.next]) >= pa)
-              finish.template operator()<true>(C.next, pa, pe, d);
+              finish.template operator()<true>(C.next, pa, pe, d, nullptr);
             else
               dl[dn++] = uint32_t(C.next);
           }
@@ -598,7 +657,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         if (head_done || A.next < hd) return;
         if (!wait && !c.slots->reached(tid - 1, pcall, PairSlots::kTailA)) return;
         waited += c.slots->wait_stage(tid - 1, pcall, PairSlots::kTailA);
-        for (size_t g = 0; g < nha; ++g) finish.template operator()<false>(long(head_a[g]), a, tb, drift);
+        for (size_t g = 0; g < nha; ++g) finish.template operator()<false>(long(head_a[g]), a, tb, drift, own_buf);
         head_done = true;
         c.slots->reach(tid, pcall, PairSlots::kHeadA);
       };
@@ -633,7 +692,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       }
       if constexpr (!kAllLocal) {
         head_check(true);
-        for (size_t g = 0; g < nta; ++g) finish.template operator()<false>(long(tail_a[g]), tb, b, drift);
+        for (size_t g = 0; g < nta; ++g) finish.template operator()<false>(long(tail_a[g]), tb, b, drift, own_buf);
       }
       a_done = true;
       run_b();
@@ -643,7 +702,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         if (tb < b) {
           waited += c.slots->wait_stage(tid + 1, pcall, PairSlots::kHeadA);
           whole(tb, b, drift_b, tail_b, ntb);
-          for (size_t g = 0; g < ntb; ++g) finish.template operator()<false>(long(tail_b[g]), tb, b, drift_b);
+          for (size_t g = 0; g < ntb; ++g) finish.template operator()<false>(long(tail_b[g]), tb, b, drift_b, own_buf);
         }
       }
     };
@@ -670,7 +729,8 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const double t0 = omp_get_wtime();
         const long ta = block(tid + 1), tb = block(tid + 2);
         Drift& d = two ? drift_b : drift;  // a two-step call hands over the second step's head
-        for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, d);
+        const PairResult* const ob = c.slots->own_rows[size_t(tid + 1)].buf.data();  // sized before the hand-off
+        for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, d, ob);
         head = omp_get_wtime() - t0;  // the waiting is not this block's work
         busy += head;
       }
@@ -692,12 +752,13 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const DeferList& list = c.slots->deferred[size_t(t)];
         const size_t lo = std::max(g0, base), hi = std::min(g1, base + list.size());
         const long ta = block(t), tb = block(t + 1);
-        for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb, drift);
+        const PairResult* const ob = c.slots->own_rows[size_t(t)].buf.data();  // sized before the barrier
+        for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb, drift, ob);
         base += list.size();
       }
     } else if (!share) {
 #pragma omp barrier
-      for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift);
+      for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift, own_buf);
     }
     if (open_dt > 0) {
 #pragma omp critical(cohdem_fused_drift)

@@ -37,8 +37,7 @@ struct ScreenHits {
   double d2[kCap];     ///< |x_i - x_j|^2
 };
 
-/// What the screening reads (the list's and the particles' arrays), and the force and
-/// torque of each row it starts, which it zeroes.
+/// What the screening reads: the list's and the particles' arrays.
 struct ScreenInput {
   const uint32_t* start;
   const uint32_t* jdx;
@@ -47,8 +46,6 @@ struct ScreenInput {
   const Vec3* shift;
   const Vec3* x;
   const double* radius;
-  Vec3* force;
-  Vec3* torque;
   uint32_t entries;  ///< length of jdx, image and live (the list)
 };
 
@@ -91,24 +88,13 @@ COHDEM_INLINE uint32_t screen_entry(const ScreenInput& s, const V2 xi_xy, const 
   return uint32_t((d2 < rsum * rsum) | (s.live[k] != 0));
 }
 
-/// Starts row i in the batch from entry kb: its force and torque sums begin at zero where
-/// the row's first entry is (a row longer than a batch is continued, not restarted).
-/// (Pointers, not the ScreenInput: callers pass their local copies, kept in registers.)
-COHDEM_INLINE void start_row(const uint32_t* start, Vec3* force, Vec3* torque, const long i, const uint32_t kb) {
-  if (start[i] >= kb) {
-    force[i] = Vec3{};
-    torque[i] = Vec3{};
-  }
-}
-
-/// Screens the entries [kb, ke) of rows i0..i1 (rows below b only) one at a time; zeroes the
-/// force and torque of every row whose first entry is in the batch. Returns the number picked.
+/// Screens the entries [kb, ke) of rows i0..i1 (rows below b only) one at a time. Returns
+/// the number picked.
 COHDEM_INLINE uint32_t screen_scalar(const ScreenInput& s, const long i0, const long i1, const long b, const uint32_t kb,
                                      const uint32_t ke, ScreenHits& h) {
   uint32_t nh = 0;
   for (long i = i0; i <= i1 && i < b; ++i) {
     const uint32_t k0 = std::max(s.start[i], kb), k1 = std::min(s.start[i + 1], ke);
-    start_row(s.start, s.force, s.torque, i, kb);
     const V2 xi_xy = load_xy(s.x[i]);
     const double xi_z = s.x[i].z;
     const double ri = s.radius[i];

@@ -63,8 +63,6 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
   const Vec3* const __restrict x = s.x;
   const double* const __restrict radius = s.radius;
   const Vec3* const __restrict shift = s.shift;
-  Vec3* const __restrict force = s.force;
-  Vec3* const __restrict torque = s.torque;
   constexpr uint32_t kAllInPlace = 0x01010101u * kNoShift;
   // Each entry's row, and its row particle's x, y, z and radius, for entries kb.. (four at a
   // time; a row's last store runs into the next row's slots, which that row then writes): a
@@ -85,10 +83,8 @@ __attribute__((target("avx2,popcnt"))) uint32_t screen_avx2(const ScreenInput& s
       _mm256_storeu_pd(erad + o, br);
     }
   };
-  for (long i = i0; i <= i1 && i < b; ++i) {
-    start_row(start, force, torque, i, kb);
+  for (long i = i0; i <= i1 && i < b; ++i)
     mark(i, std::max(start[i], kb), std::min(start[i + 1], ke));
-  }
   // The lanes past the batch's end read a valid row (and are not picked).
   mark(i0, ke, ke + 1);
   const uint32_t full = s.entries >= 4 ? s.entries - 3 : 0;

@@ -68,8 +68,6 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
   const Vec3* const __restrict x = s.x;
   const double* const __restrict radius = s.radius;
   const Vec3* const __restrict shift = s.shift;
-  Vec3* const __restrict force = s.force;
-  Vec3* const __restrict torque = s.torque;
   constexpr uint64_t kAllInPlace = 0x0101010101010101ull * kNoShift;
   // Each entry's row, and its row particle's x, y, z and radius, for entries kb.. (eight at
   // a time; a row's last store runs into the next row's slots, which that row then writes):
@@ -91,10 +89,8 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
       _mm512_storeu_pd(erad + o, br);
     }
   };
-  for (long i = i0; i <= i1 && i < b; ++i) {
-    start_row(start, force, torque, i, kb);
+  for (long i = i0; i <= i1 && i < b; ++i)
     mark(i, std::max(start[i], kb), std::min(start[i + 1], ke));
-  }
   // The lanes past the batch's end read a valid row (and are not picked).
   mark(i0, ke, ke + 1);
   // Groups of eight read whole groups inside the list only; the list's last entries singly.

@@ -24,7 +24,6 @@ struct RandomList {
   std::vector<double> radius;
   std::vector<uint32_t> start, jdx;
   std::vector<uint8_t> image, live;
-  std::vector<Vec3> force, torque;
 
   explicit RandomList(uint64_t seed, long n = 400) {
     Rng rng(seed);
@@ -65,12 +64,10 @@ struct RandomList {
       }
       start.push_back(uint32_t(jdx.size()));
     }
-    force.assign(size_t(n), Vec3{1, 1, 1});
-    torque.assign(size_t(n), Vec3{1, 1, 1});
   }
   ScreenInput input() {
     return {start.data(), jdx.data(), image.data(), live.data(), shift.data(), x.data(), radius.data(),
-            force.data(), torque.data(), uint32_t(jdx.size())};
+            uint32_t(jdx.size())};
   }
 };
 
@@ -82,11 +79,8 @@ uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uin
   ScreenHits a, v;
   std::memset(&a, 0xAB, sizeof a);
   std::memset(&v, 0xCD, sizeof v);
-  const auto fa = L.force;
   const ScreenInput in = L.input();
   const uint32_t na = screen_scalar(in, i0, i1, b, kb, ke, a);
-  const auto force_scalar = L.force;
-  L.force = fa;
   const uint32_t nv = wide(in, i0, i1, b, kb, ke, v);
   EXPECT_EQ(na, nv) << "rows " << i0 << ".." << i1 << " entries " << kb << ".." << ke;
   for (uint32_t h = 0; h < std::min(na, nv); ++h) {
@@ -98,8 +92,6 @@ uint32_t compare_batch(RandomList& L, long i0, long i1, long b, uint32_t kb, uin
     EXPECT_EQ(0, std::memcmp(&a.dz[h], &v.dz[h], 8)) << "dz of hit " << h;
     EXPECT_EQ(0, std::memcmp(&a.d2[h], &v.d2[h], 8)) << "d2 of hit " << h;
   }
-  EXPECT_EQ(0, std::memcmp(force_scalar.data(), L.force.data(), L.force.size() * sizeof(Vec3)))
-      << "rows whose force is zeroed";
   return na;
 }
 
