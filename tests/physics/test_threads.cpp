@@ -411,10 +411,14 @@ TEST(Threads, ClosingHalfKickInTheKernelEqualsASeparatePass) {
 // the same arithmetic in the same order, so the states must agree bit for bit with plain
 // steps, on 1, 2 and 3 threads, with frozen particles (which only mark the displacement
 // set) and particles attached to a moving wall (which the next step's pass still carries)
-// and neighbor rebuilds decided from the displacements the loop reduced.
+// and neighbor rebuilds decided from the displacements the loop reduced. A fused call does
+// not store a free particle's force and torque (ForceContext::open_dt); the unfused step
+// that ends the run must, so the particles' forces and torques after it agree too.
 TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
   constexpr int kSteps = 400;
   for (int threads : {1, 2, 3}) {
+    std::vector<Vec3> force[2], torque[2];
+    size_t free_n = 0, free_loaded = 0;  // of the fused run: free particles, those with a force
     auto run_steps = [&](bool fuse) {
       auto s = make_box(threads, false);
       ParticleStore& P = s->particles;
@@ -434,6 +438,14 @@ TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
       }
       EXPECT_EQ(mid, fuse ? size_t(kSteps - 1) : 0u);
       EXPECT_FALSE(s->mid_step());
+      force[fuse] = P.force;
+      torque[fuse] = P.torque;
+      if (fuse)
+        for (size_t i = 0; i < P.size(); ++i)
+          if (P.flag[i] == kFree) {
+            ++free_n;
+            free_loaded += norm(P.force[i]) > 0;  // gravity at least: not an array left unwritten
+          }
       return state_of(*s);
     };
     const State a = run_steps(false), b = run_steps(true);
@@ -443,6 +455,12 @@ TEST(Threads, FusedOpeningOfTheNextStepEqualsTheSeparatePass) {
     size_t differ = 0;
     for (size_t i = 0; i < a.x.size(); ++i) differ += !(a.x[i] == b.x[i] && a.v[i] == b.v[i] && a.w[i] == b.w[i]);
     EXPECT_EQ(differ, 0u) << threads << " threads";
+    size_t forces_differ = 0;
+    for (size_t i = 0; i < a.x.size(); ++i)
+      forces_differ += !(force[0][i] == force[1][i] && torque[0][i] == torque[1][i]);
+    EXPECT_EQ(forces_differ, 0u) << threads << " threads";
+    EXPECT_GT(free_n, 0u);
+    EXPECT_EQ(free_loaded, free_n) << threads << " threads";
     EXPECT_TRUE(a.wall_force == b.wall_force) << threads << " threads";
     EXPECT_EQ(a.builds, b.builds) << threads << " threads";
     if (threads == 2)
