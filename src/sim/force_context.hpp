@@ -49,7 +49,7 @@ inline constexpr PairResult kNoPair{Vec3{0.0, 0.0, 0.0}, Vec3{-0.0, -0.0, -0.0}}
 /// rows before the piece, so its sums are completed by a gather, after which its own row's
 /// results are added, in list order): `count` records from `first` in the own-row buffer of
 /// the thread that swept its row (PairSlots::OwnStore), each the force and torque on i of a
-/// live entry, in PairResult's f and tj. Local particles take their own results straight
+/// live entry (OwnResult). Local particles take their own results straight
 /// into their reverse sums instead, after the pairs of the rows before (one accumulator a
 /// particle: the same operations in the same order). count is 0 between force calls (the
 /// finish that reads it resets it).
@@ -91,6 +91,14 @@ struct NoFillAllocator : std::allocator<T> {
 };
 /// A thread's particles left for another thread or for after the barrier (force loop).
 using DeferList = std::vector<uint32_t, NoFillAllocator<uint32_t>>;
+/// One own-row result (OwnAt): the force and the torque on i. Six plain doubles, so that
+/// a buffer of them grows without a zero fill: it is sized for every entry of the rows that
+/// may need it, and only their live contacts' are written (the pages never written are never
+/// committed).
+struct OwnResult {
+  double f[3], t[3];
+};
+using OwnBuffer = std::vector<OwnResult, NoFillAllocator<OwnResult>>;
 
 /// How the force loop on several threads splits the particles, and where it keeps the results
 /// it stores for the gather. The blocks are contiguous ranges of particles of about equal
@@ -214,7 +222,7 @@ struct PairSlots {
   /// call. Each thread sizes and writes its own (a cache line or more each: alignas) before
   /// the hand-off or barrier after which another thread may read it.
   struct alignas(64) OwnStore {
-    std::vector<PairResult> buf;
+    OwnBuffer buf;
   };
   std::vector<OwnStore> own_rows;
   /// Per particle: where its own-row results are (OwnAt; all counts 0 between calls).

@@ -237,7 +237,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       return local_to_block(dep_lo, q, a, b);
     };
     // This thread's own-row buffer and the results in it (OwnAt; set up below).
-    PairResult* own_buf = nullptr;
+    OwnResult* own_buf = nullptr;
     uint32_t own_used = 0;
 
     // Pass 1 of the list entries [kb, ke) (at most kBatch), which belong to the rows [i0, i1]
@@ -300,7 +300,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
             OwnAt& o = own_at[i];
             o.first = own_used - o.count;  // the row's first result (no branch)
             ++o.count;
-            own_buf[own_used++] = {f, ti};
+            own_buf[own_used++] = OwnResult{{f.x, f.y, f.z}, {ti.x, ti.y, ti.z}};
           }
           if (kAllLocal || local(j, a, b)) {  // j's share straight into its reverse sums
             rev[j].f -= f;
@@ -381,7 +381,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // only particles whose rows all lie in its block), so the test is left out.
     // ob: the own-row buffer of the thread that swept i's row (read where i is not local to
     // the piece [a, b)).
-    auto finish = [&]<bool kLocal>(const long i, const long a, const long b, Drift& drift, const PairResult* ob)
+    auto finish = [&]<bool kLocal>(const long i, const long a, const long b, Drift& drift, const OwnResult* ob)
                       __attribute__((always_inline)) {
       // The pairs where i is j, summed in ascending list order (the order of rpair, and the
       // order in which the row sweep scatters them), then the results of i's own row, in list
@@ -419,10 +419,10 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       if (!(kLocal || local(uint32_t(i), a, b))) {
         // i's own row: its live entries' results, in list order (OwnAt), then reset.
         OwnAt& o = own_at[i];
-        const PairResult* const r = ob + o.first;
+        const OwnResult* const r = ob + o.first;
         for (uint32_t q = 0; q < o.count; ++q) {
-          R += r[q].f;
-          RT += r[q].tj;
+          R += Vec3{r[q].f[0], r[q].f[1], r[q].f[2]};
+          RT += Vec3{r[q].t[0], r[q].t[1], r[q].t[2]};
         }
         o.count = 0;
       }
@@ -508,14 +508,14 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // to their piece: its block's head, and in a two-step call its tail's first `span` rows,
     // at most one result an entry of those rows a step. One thread: none (every particle is
     // local).
-    std::vector<PairResult> own_plain;  // several threads without a PairSlots
+    OwnBuffer own_plain;  // several threads without a PairSlots
     if (nt > 1) {
       size_t cap = start[head_end] - start[a];
       if (two) {
         const long tb = c.slots->tail(tid);
         cap = 2 * (cap + (start[std::min(b, tb + c.slots->span)] - start[tb]));
       }
-      std::vector<PairResult>& store = share ? c.slots->own_rows[size_t(tid)].buf : own_plain;
+      OwnBuffer& store = share ? c.slots->own_rows[size_t(tid)].buf : own_plain;
       if (store.size() < cap) store.resize(cap);
       own_buf = store.data();
     }
@@ -729,7 +729,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const double t0 = omp_get_wtime();
         const long ta = block(tid + 1), tb = block(tid + 2);
         Drift& d = two ? drift_b : drift;  // a two-step call hands over the second step's head
-        const PairResult* const ob = c.slots->own_rows[size_t(tid + 1)].buf.data();  // sized before the hand-off
+        const OwnResult* const ob = c.slots->own_rows[size_t(tid + 1)].buf.data();  // sized before the hand-off
         for (size_t g = 0; g < H.count; ++g) finish.template operator()<false>(long(H.list[g]), ta, tb, d, ob);
         head = omp_get_wtime() - t0;  // the waiting is not this block's work
         busy += head;
@@ -752,7 +752,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         const DeferList& list = c.slots->deferred[size_t(t)];
         const size_t lo = std::max(g0, base), hi = std::min(g1, base + list.size());
         const long ta = block(t), tb = block(t + 1);
-        const PairResult* const ob = c.slots->own_rows[size_t(t)].buf.data();  // sized before the barrier
+        const OwnResult* const ob = c.slots->own_rows[size_t(t)].buf.data();  // sized before the barrier
         for (size_t g = lo; g < hi; ++g) finish.template operator()<false>(list[g - base], ta, tb, drift, ob);
         base += list.size();
       }
