@@ -392,32 +392,32 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         R = rev[i].f;
         RT = rev[i].tj;
         rev[i] = PairResult{};  // zero again for the next call (no fill pass over rev)
-      } else if (slot_of != nullptr) {
-        // i's pairs in consecutive slots, in the order of its transposed list, those not in
-        // contact holding kNoPair (PairSlots::of): one run read front to back, the sums of
-        // the live ones bit for bit. Across the particles finished in ascending order (the
-        // boundary's, handed over) the runs ascend too, so the reads form a stream that the
-        // hardware prefetches, also from the other core's cache.
-        const uint32_t q0 = rstart[i], m = rstart[i + 1] - q0;
-        if (m > 0) {
-          const PairResult* const r = res + slot_of[rpair[q0]];
-          for (uint32_t q = 0; q < m; ++q) {
-            R -= r[q].f;
-            RT += r[q].tj;
-          }
-        }
       } else {
-        for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
-          const uint32_t k = rpair[q];
-          if (live[k]) {
-            const PairResult& r = res[k];
-            R -= r.f;
-            RT += r.tj;
+        if (slot_of != nullptr) {
+          // i's pairs in consecutive slots, in the order of its transposed list, those not in
+          // contact holding kNoPair (PairSlots::of): one run read front to back, the sums of
+          // the live ones bit for bit. Across the particles finished in ascending order (the
+          // boundary's, handed over) the runs ascend too, so the reads form a stream that the
+          // hardware prefetches, also from the other core's cache.
+          const uint32_t q0 = rstart[i], m = rstart[i + 1] - q0;
+          if (m > 0) {
+            const PairResult* const r = res + slot_of[rpair[q0]];
+            for (uint32_t q = 0; q < m; ++q) {
+              R -= r[q].f;
+              RT += r[q].tj;
+            }
+          }
+        } else {
+          for (uint32_t q = rstart[i]; q < rstart[i + 1]; ++q) {
+            const uint32_t k = rpair[q];
+            if (live[k]) {
+              const PairResult& r = res[k];
+              R -= r.f;
+              RT += r.tj;
+            }
           }
         }
-      }
-      if (!(kLocal || local(uint32_t(i), a, b))) {
-        // i's own row: its live entries' results, in list order (OwnAt), then reset.
+        // Then i's own row: its live entries' results, in list order (OwnAt), then reset.
         OwnAt& o = own_at[i];
         const OwnResult* const r = ob + o.first;
         for (uint32_t q = 0; q < o.count; ++q) {
