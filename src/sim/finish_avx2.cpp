@@ -7,6 +7,7 @@
 #include "sim/finish.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 
 #if defined(__x86_64__)
@@ -24,6 +25,14 @@ namespace {
 struct Spread { __m256d a, b, c; };
 __attribute__((target("avx2"), always_inline)) inline Spread spread(const __m256d s) {
   return {_mm256_permute4x64_pd(s, 0x40), _mm256_permute4x64_pd(s, 0xA5), _mm256_permute4x64_pd(s, 0xFE)};
+}
+
+/// Asks for the cache line that holds byte `bytes` after p (for writing when kWrite). The
+/// address is formed as an integer: it may lie past the arrays' ends (a prefetch never
+/// faults), where pointer arithmetic would not be allowed.
+template <int kWrite>
+__attribute__((always_inline)) inline void ask(const void* p, const size_t bytes) {
+  __builtin_prefetch(reinterpret_cast<const void*>(reinterpret_cast<uintptr_t>(p) + bytes), kWrite, 3);
 }
 
 /// Two doubles at p and q as one 16-byte lane.
@@ -62,6 +71,26 @@ __attribute__((target("avx2"))) long finish_free_avx2(const FinishFree& f, long 
     static_assert(kFree == 0);
     if (fl != 0 || wstart[i + 4] != wstart[i]) break;
     const size_t o = size_t(i) * 3;
+    // The lines of the particles kFinishAhead on (finish.hpp): 96 bytes of each Vec3 array,
+    // 192 of the sums, 32 of mass and inertia per group of four (a line asked for twice is
+    // asked for at no cost worth counting; a span's last line is asked for by the next group).
+    {
+      constexpr size_t kA = kFinishAhead;
+      const size_t ov = (o + 3 * kA) * sizeof(double), orv = (size_t(i) + kA) * sizeof(PairResult);
+      ask<1>(v, ov);
+      ask<1>(v, ov + 64);
+      ask<1>(w, ov);
+      ask<1>(w, ov + 64);
+      ask<0>(ref, ov);
+      ask<0>(ref, ov + 64);
+      ask<1>(rev, orv);
+      ask<1>(rev, orv + 64);
+      ask<1>(rev, orv + 128);
+      ask<0>(mass, (size_t(i) + kA) * sizeof(double));
+      ask<0>(inertia, (size_t(i) + kA) * sizeof(double));
+      ask<0>(flag, size_t(i) + kA);
+      ask<0>(wstart, (size_t(i) + kA) * sizeof(uint32_t));
+    }
     // The reverse sums (f, tj) of the four particles: f of particle p at rp[6p..6p+2], tj at
     // rp[6p+3..6p+5], read into the component pattern, then zeroed for the next call.
     double* const rp = rev + size_t(i) * 6;
