@@ -33,8 +33,8 @@ struct FinishFree {
 /// Where the particles outgrow the caches, these are the lines the finish reads first in
 /// the step: in a dilute gas a particle without contacts has only its position and radius
 /// read before (by the screening), and the reference positions, inertia, flags and
-/// wall-entry starts only the finish reads. The hardware prefetcher follows the dozen or so
-/// streams of a sweep poorly (each stream stops at every 4 KiB page): asked for this far
+/// wall-entry starts only the finish reads. The hardware prefetcher, with the dozen or so
+/// streams of a sweep to follow, does not bring them in time: asked for this far
 /// ahead, the 10^6-particle gas ran 1.11x as fast on one thread of the development VM and
 /// 1.12x on two, the 10^4 gas and the chute as fast as before (docs/performance-history.md,
 /// sixty-second round, with the distances tried). The results are the same bits.
