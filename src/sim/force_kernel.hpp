@@ -761,9 +761,15 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
       for (const uint32_t q : own) finish.template operator()<false>(long(q), a, b, drift, own_buf);
     }
     if (open_dt > 0) {
+      // Both merges inside the critical section: `omp critical` covers one statement or
+      // block, and until the sixty-fifth round the second merge stood outside it, so two
+      // threads could update *drift2 at once and one thread's displacements be lost (a
+      // rebuild taken late in a two-step call on several threads).
 #pragma omp critical(cohdem_fused_drift)
-      c.drift->merge(drift);  // max / min / or: the same in any order
-      if (two) c.drift2->merge(drift_b);
+      {
+        c.drift->merge(drift);  // max / min / or: the same in any order
+        if (two) c.drift2->merge(drift_b);
+      }
     }
   };
   if (parallel && c.serial_blocks && c.slots != nullptr && c.slots->chained && !two) {
