@@ -16,6 +16,15 @@ over sizes and thread counts; the table shows the best run and the median. --chu
 LAMMPS's chute benchmark (32,000 spheres in dense flow, bench/chute.toml), a problem with
 4x as many contacts per particle as the gas.
 
+--bed runs a packed bed at rest instead of the gas (bench/gen_packing.py --bed, bench/bed.toml;
+LAMMPS: bench/peers/in.bed): spheres on a compressed simple cubic lattice (spacing 0.999 d,
+periodic in x, y and z, no gravity), each pressing on its six neighbours for the whole run,
+so every list entry is a contact (3 a particle) and the lists are never rebuilt. The gas is
+the memory-bound end of the range (0.1 contacts a particle, the particle arrays streamed for
+little arithmetic), the bed the contact-bound end (the contacts' records streamed with the
+particles, and the contact law evaluated on every entry). Its sizes are cubes: a size N runs
+round(N^(1/3))^3 spheres (10,648 for 10^4, 97,336 for 10^5, 10^6 exactly).
+
 --ceiling also measures what the machine gives two runs at once: in each repeat and for
 each problem, two independent one-thread runs started together (no shared data, no
 synchronisation); the median of their summed rates over the median one-thread rate is the
@@ -96,6 +105,8 @@ def main():
     ap.add_argument("--cohdem", default=os.path.join(REPO, "build", "cohdem"))
     ap.add_argument("--out", default=os.path.join(REPO, "build", "bench", "scaling"))
     ap.add_argument("--chute", action="store_true", help="add LAMMPS's chute benchmark (32,000 spheres)")
+    ap.add_argument("--bed", action="store_true",
+                    help="a packed bed at rest (every entry a contact) at every size instead of the gas")
     ap.add_argument("--ceiling", action="store_true",
                     help="also run two independent one-thread runs at once: what two cores give here")
     ap.add_argument("--per-core", action="store_true",
@@ -116,20 +127,26 @@ def main():
         sys.exit("--lammps needs 1 among --threads (its runs are set against cohdem's one-thread runs) and "
                  "LAMMPS's lmp on the PATH (bench/install-peers.sh)")
     os.makedirs(a.out, exist_ok=True)
+    # The gas (keys p<N>) or, with --bed, the packed bed (keys b<N>): generator options, the
+    # case's header, its periodic directions, LAMMPS's input.
+    pre, gen, header, box, lmp_in = (("b", ["--bed"], "bed.toml", "xyz", "in.bed") if a.bed else
+                                     ("p", ["--spacing", "1.01"], "packing.toml", "xy", "in.packing"))
     for n in sizes:
-        data, case = os.path.join(a.out, f"p{n}.data"), os.path.join(a.out, f"p{n}.toml")
+        data, case = os.path.join(a.out, f"{pre}{n}.data"), os.path.join(a.out, f"{pre}{n}.toml")
         # The particles in a CSV file beside the case ([[particles]]): loaded in a fraction of
         # the time and memory of one TOML table each (an older folder's case is redone). LAMMPS
         # reads the data file itself.
-        if (not os.path.exists(case) or not os.path.exists(os.path.join(a.out, f"p{n}.grain.csv"))
+        if (not os.path.exists(case) or not os.path.exists(os.path.join(a.out, f"{pre}{n}.grain.csv"))
                 or (a.lammps and not os.path.exists(data))):
-            subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(n), data, "--spacing", "1.01"],
+            subprocess.run([sys.executable, os.path.join(HERE, "gen_packing.py"), str(n), data] + gen,
                            check=True, stdout=subprocess.DEVNULL)
             subprocess.run([sys.executable, os.path.join(HERE, "lammps_data_to_case.py"), data,
-                            os.path.join(HERE, "packing.toml"), "-o", case, "--frozen", "", "--box", "xy", "--csv"],
+                            os.path.join(HERE, header), "-o", case, "--frozen", "", "--box", box, "--csv"],
                            check=True)
-    # Problems by key: the gas at each size, then (with --chute) the chute.
-    probs = [(f"p{n}", f"{n:,}", os.path.join(a.out, f"p{n}.toml")) for n in sizes]
+    # Problems by key: the gas (or the bed) at each size, then (with --chute) the chute. The
+    # bed's label is its own count (a cube).
+    probs = [(f"{pre}{n}", f"{(round(n ** (1 / 3)) ** 3 if a.bed else n):,}", os.path.join(a.out, f"{pre}{n}.toml"))
+             for n in sizes]
     if a.chute:
         if not os.path.exists(a.chute_data):
             sys.exit(f"{a.chute_data} not found (--chute-data)")
@@ -153,7 +170,7 @@ def main():
     lmp_dir = os.path.join(a.out, "lammps")
     if a.lammps:
         os.makedirs(lmp_dir, exist_ok=True)
-        shutil.copy(os.path.join(HERE, "peers", "in.packing"), lmp_dir)
+        shutil.copy(os.path.join(HERE, "peers", lmp_in), lmp_dir)
     lmp = {}  # gas key -> one record per repeat
 
     def lammps_run(key, label, r):
@@ -161,7 +178,7 @@ def main():
         (the run pinned to the same core with --per-core)."""
         cpu = cores[r % len(cores)] if cores else None
         text, rss = pc.sh(["lmp", "-var", "nsteps", str(a.steps), "-var", "data", os.path.abspath(os.path.join(a.out, f"{key}.data")),
-                           "-in", "in.packing", "-log", "none"], lmp_dir, os.path.join(lmp_dir, f"{key}.{r + 1}.log"), cpu)
+                           "-in", lmp_in, "-log", "none"], lmp_dir, os.path.join(lmp_dir, f"{key}.{r + 1}.log"), cpu)
         rate, ke, ke_rot, vz, _ = pc.parse_peer(text, a.steps)
         ours = allr[(key, f"core{cpu}") if cpu is not None else (key, 1)][-1]
         lmp.setdefault(key, []).append({"rate": rate, "cohdem_rate": ours, "cpu": cpu, "peak_rss_bytes": rss,
@@ -375,7 +392,7 @@ def main():
                     if imbalance is not None:
                         row["imbalance_us"] = imbalance
     # Issue 6's flatness target: cost per particle-step within 20 % from 10^4 to 10^6 particles.
-    ends = [(f"p{n}", threads[0]) for n in (10000, 1000000)]
+    ends = [(f"{pre}{n}", threads[0]) for n in (10000, 1000000)]
     if all(k in allr for k in ends):
         lo, hi = ends
         print(f"\ncost per particle-step, 10^6 over 10^4 ({threads[0]} thread(s)): "

@@ -2,7 +2,7 @@
 # The benchmark inputs stay valid as the code changes (issue 6: "keep the benchmark script
 # working"): every bench/ case is built from its data as bench/peer_compare.py and
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
-# steps, model_cost.py prints its four rows, instructions.py counts a small packing,
+# steps (the packed bed: its contacts and momentum by construction), model_cost.py prints its four rows, instructions.py counts a small packing,
 # contact_instructions.py the force loop's instructions per contact of two laws,
 # scaling.py gives its table for a small gas (with --ceiling and --per-core),
 # peer_compare.py pins its rounds to the cores, contention.py runs it beside a memory hog,
@@ -59,6 +59,35 @@ done
 python3 "$src/bench/gen_packing.py" 2000 "$work/packing.data" > /dev/null &&
   python3 "$src/bench/lammps_data_to_case.py" "$work/packing.data" "$src/bench/packing.toml" -o "$work/packing.toml" \
     --frozen "" --box xy > /dev/null && check_case packing "$work/packing.toml" || { echo "FAIL packing input"; fail=$((fail+1)); }
+# The packed bed (bench/gen_packing.py --bed, bench/bed.toml, scaling.py --bed): 10^3 spheres
+# on a simple cubic lattice of spacing 0.999 d, periodic in x, y and z. By construction each
+# sphere overlaps its six neighbours by 0.001 d and the random velocities (|v| <= 0.01) move
+# it by under 1e-6 d in 3 steps, so the run holds exactly 3 contacts a sphere (no more: the
+# next neighbours are sqrt(2) d apart); with no gravity and no walls the momentum is
+# conserved, so the mean velocity stays the data file's to rounding (1e-12 of the mean
+# speed, 0.005).
+if python3 "$src/bench/gen_packing.py" 1000 "$work/bed.data" --bed > /dev/null &&
+   python3 "$src/bench/lammps_data_to_case.py" "$work/bed.data" "$src/bench/bed.toml" -o "$work/bed.toml" \
+     --frozen "" --box xyz > /dev/null; then
+  check_case bed "$work/bed.toml"
+  if python3 - "$work/o_bed/summary.json" "$work/bed.data" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+lines = open(sys.argv[2]).read().split("Velocities")[1].split("\n")
+v = [list(map(float, l.split()[1:4])) for l in lines if l.strip()]
+mean = [sum(c) / len(v) for c in zip(*v)]
+ok = len(v) == 1000 and s["particles"] == 1000 and s["contacts"] == 3000
+ok = ok and all(abs(a - b) <= 1e-12 * 0.005 for a, b in zip(s["mean_velocity"], mean))
+print(("ok   " if ok else "FAIL ") + f"bed: {s['contacts']} contacts (3000 by construction), mean velocity {s['mean_velocity']} against {mean}")
+sys.exit(0 if ok else 1)
+PY
+  then pass=$((pass+1)); else fail=$((fail+1)); fi
+  # --bed --spacing outside [0.9, 1): a clear error, no file.
+  if python3 "$src/bench/gen_packing.py" 1000 "$work/bad.data" --bed --spacing 1.0 > "$work/bad.log" 2>&1 ||
+     [ -e "$work/bad.data" ] || ! grep -q "expected 0.9 <= spacing < 1" "$work/bad.log"; then
+    echo "FAIL gen_packing.py --bed --spacing 1.0 accepted"; fail=$((fail+1))
+  else pass=$((pass+1)); echo "ok   gen_packing.py --bed --spacing 1.0 refused"; fi
+else echo "FAIL bed input"; fail=$((fail+1)); fi
 # --csv: the same packing with its particles in a CSV file ([[particles]], one group: the
 # same order) runs 3 steps to the same state, to the last digit of the energies.
 if python3 "$src/bench/lammps_data_to_case.py" "$work/packing.data" "$src/bench/packing.toml" -o "$work/packing_csv.toml" \
