@@ -114,12 +114,33 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   };
 
   // 3. Bin (counting sort); optionally re-sort particles so cell neighbours are memory neighbours.
-  auto bin = [&]() {
+  //    Periodic in z (the slowest direction of the cell order) with at least 4 planes of
+  //    cells, the re-sort takes the planes folded: 0, nz - 1, 1, nz - 2, 2, ... (plane z at
+  //    place 2z in the first half, 2(nz - 1 - z) + 1 in the second), so that the planes
+  //    either side of the periodic seam are neighbours in memory too. In plain order the
+  //    bottom plane's pairs reach the top plane, n particles away: every pair's partner lies
+  //    within one plane of cells in the particle order except those, and the force loop's
+  //    split (PairSlots::span, the widest reach of a row) then spans the whole system, which
+  //    leaves several threads no chained finishing and no two steps in one sweep. Folded, a
+  //    partner lies within two planes (plus a row and a cell) of its row, seam or not. The
+  //    search numbers the cells as before (the fold is only the particles' order), and every
+  //    pair is found once whatever the indices (step 4).
+  const bool fold = dom.periodic[2] && nc[2] >= 4;
+  const size_t plane = size_t(nc[0]) * size_t(nc[1]);
+  auto folded = [&](const size_t c) {
+    const size_t z = c / plane, nz = size_t(nc[2]);
+    const size_t at = 2 * z < nz ? 2 * z : 2 * (nz - 1 - z) + 1;
+    return at * plane + c % plane;
+  };
+  auto bin = [&](const bool by_fold = false) {
     cell_of_.resize(n);
     reserve_headroom(cell_start_, ncell + 1);
     cell_start_.assign(ncell + 1, 0);
 #pragma omp parallel for schedule(static) if (long(n) > parallel_min)
-    for (size_t i = 0; i < n; ++i) cell_of_[i] = uint32_t(cell_index(p.x[i]));
+    for (size_t i = 0; i < n; ++i) {
+      const size_t c = cell_index(p.x[i]);
+      cell_of_[i] = uint32_t(by_fold ? folded(c) : c);
+    }
     for (size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
     for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
     cell_list_.reserve(n + kSearchPad);  // exactly (the AVX2 search's padding below; a resize past
@@ -127,7 +148,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
     for (size_t i = 0; i < n; ++i) cell_list_[fill_[cell_of_[i]]++] = uint32_t(i);
   };
-  bin();
+  bin(resort && fold);
   if (resort && n > 0) {
     p.permute(cell_list_);
     bin();
