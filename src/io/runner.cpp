@@ -320,7 +320,7 @@ int run_case(Case c, const RunOptions& opt) {
                               : c.thermal.enabled          ? "off (thermal model)"
                               : !s.pairs_fit_size()
                                   ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
-                                  : "where the run allows (summary.json: step_pairs)";
+                                  : "where the run allows and the contacts are at most 1 a particle (summary.json: step_pairs)";
     spdlog::info("force loop: {} thread(s), list screening and contact lanes {}, two steps per sweep {}", nt,
                  screen_avx512_enabled()
                      ? "AVX-512, eight at a time (COHDEM_SIMD=avx2 selects AVX2, four, COHDEM_SIMD=0 the scalar code)"
@@ -490,12 +490,14 @@ int run_case(Case c, const RunOptions& opt) {
   j["particle_steps_per_s"] = loop_s > 0 ? double(particle_steps) / loop_s : 0.0;
   // System::step_pair: pairs of steps evaluated in one sweep, undone (a rebuild fell between
   // them) and the steps taken again after those; of the pairs, those evaluated near a
-  // rebuild on the displacements' forecast, and the calls there that took plain steps.
+  // rebuild on the displacements' forecast, and the calls there that took plain steps; the
+  // calls that took plain steps because the contacts were dense (SimConfig::pair_max_contacts).
   j["step_pairs"] = {{"pairs", s.pair_stats().pairs},
                      {"undone", s.pair_stats().replays},
                      {"steps_taken_again", s.pair_stats().replayed_steps},
                      {"forecast", s.pair_stats().forecast},
-                     {"near_plain", s.pair_stats().near_plain}};
+                     {"near_plain", s.pair_stats().near_plain},
+                     {"dense_plain", s.pair_stats().dense_plain}};
   j["kinetic_energy"] = s.kinetic_energy();
   {  // flow observables of the free particles (benchmarks compare them with peer codes)
     double mfree = 0;

@@ -55,6 +55,13 @@ struct SimConfig {
   /// `[simulation] pair_min`, and `pair_steps = false` for negative). The environment
   /// variable COHDEM_PAIR=0 turns it off too (for comparisons). Results are the same bits.
   long pair_min = 65536;
+  /// Two steps in one sweep only while the live contacts are at most this many a particle
+  /// (counted every System::kDenseCheckSteps steps and after each list build): a pair saves
+  /// the second step's reads from memory, which is what a dilute problem's step waits for (the
+  /// 10^6 gas, 0.1 contacts a particle: 1.15x on one thread), while a packed bed's step is
+  /// the contact law's arithmetic (bench/bed.toml, 3 a particle: 0.985x on one thread and
+  /// 0.94x on two at 10^6, docs/performance-history.md, sixty-seventh round). Tests raise it.
+  double pair_max_contacts = 1.0;
   /// Below this fraction of what triggers a list rebuild (the displacements since the
   /// build, NeighborList::rebuild_measure), step_pair evaluates pairs without looking ahead;
   /// above it, only where the measure's growth over the last steps, four times over, stays
@@ -161,6 +168,8 @@ class System {
     /// Of the pairs, those evaluated past SimConfig::pair_margin on the forecast; and the
     /// calls that took plain steps there instead.
     uint64_t forecast = 0, near_plain = 0;
+    /// Calls that took plain steps because the contacts were dense (SimConfig::pair_max_contacts).
+    uint64_t dense_plain = 0;
   };
   const PairStats& pair_stats() const { return pair_stats_; }
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
@@ -264,6 +273,12 @@ class System {
   };
   Trend trend_;
   PairStats pair_stats_;
+  /// step_pair's count of the live contacts (SimConfig::pair_max_contacts): whether they were
+  /// dense, at which step and after which list build it was counted.
+  static constexpr uint64_t kDenseCheckSteps = 64;
+  bool dense_ = false;
+  uint64_t dense_step_ = 0, dense_builds_ = ~uint64_t(0);
+  bool contacts_dense();
   /// Moves the walls' geometry by one step (translation, oscillation, servo/lid travel) and
   /// records each wall's translation in wall_dx_; step_once carries attached particles.
   void move_wall_geometry(double dt);

@@ -67,6 +67,7 @@ std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = 
     s->particles.v[i] = s->particles.omega[i] = Vec3{};
   }
   s->cfg.pair_min = 0;  // pairs for these few particles too
+  s->cfg.pair_max_contacts = 1e9;  // and however dense their contacts
   if (threads > 1) {
     s->cfg.threads = threads;
     s->cfg.parallel_min = 0;  // the force loop on `threads` threads for these few particles
@@ -360,4 +361,47 @@ TEST(StepPair, NearARebuildPairsFollowTheDisplacementsForecast) {
                 (unsigned long long)sf.replays, (unsigned long long)sf.replayed_steps);
   }
   EXPECT_GE(undone, 1u);
+}
+
+// SimConfig::pair_max_contacts: a packed bed's step is the contact law's arithmetic, which a
+// pair does not save, so step_pair takes plain steps while the live contacts exceed one a
+// particle. A periodic 8 x 8 x 8 lattice of d = 2 mm spheres at a spacing of 0.999 d holds 3
+// contacts a particle by construction (each sphere presses on its six neighbours, and the
+// small velocities keep them there): with the default bound every call takes plain steps
+// (counted as dense_plain, no pair); with the bound raised to 4 the same run takes pairs, and
+// both end in the same state, bit for bit (pairs change when, not what).
+TEST(StepPair, DenseContactsTakePlainSteps) {
+  auto make = [](double max_contacts) {
+    auto s = make_system({{"glass", 2500, 0, 0}}, "linear", "none", params({{"kn", 2e4}, {"e", 0.5}, {"mu", 0.5}}),
+                         5e-6, {0, 0, 0}, 2e-4);
+    const int m = 8;
+    const double a = 0.999 * 2e-3;
+    s->cfg.domain.lo = {0, 0, 0};
+    s->cfg.domain.hi = {m * a, m * a, m * a};
+    s->cfg.domain.periodic = {true, true, true};
+    Rng rng(9);
+    for (int z = 0; z < m; ++z)
+      for (int y = 0; y < m; ++y)
+        for (int x = 0; x < m; ++x)
+          s->add_particle(0, 1e-3, {(x + 0.5) * a, (y + 0.5) * a, (z + 0.5) * a},
+                          {1e-3 * rng.normal(), 1e-3 * rng.normal(), 1e-3 * rng.normal()});
+    s->cfg.pair_min = 0;
+    s->cfg.pair_max_contacts = max_contacts;
+    s->prepare();
+    for (int k = 0; k < 100; ++k) s->step_pair();
+    s->step_once(false);
+    return s;
+  };
+  auto dense = make(1.0), raised = make(4.0);
+  const size_t n = dense->particles.size();
+  EXPECT_EQ(dense->pair_contact_count(), 3 * n);
+  EXPECT_EQ(dense->pair_stats().pairs, 0u);
+  EXPECT_GE(dense->pair_stats().dense_plain, 99u);  // (not the first call: no step opened yet, pairs_allowed)
+  EXPECT_GE(raised->pair_stats().pairs, 90u);  // (the first pairs wait for a snapshot and the forecast)
+  EXPECT_EQ(raised->pair_stats().dense_plain, 0u);
+  EXPECT_EQ(raised->pair_contact_count(), 3 * n);
+  EXPECT_TRUE(dense->particles.x == raised->particles.x);
+  EXPECT_TRUE(dense->particles.v == raised->particles.v);
+  EXPECT_TRUE(dense->particles.omega == raised->particles.omega);
+  EXPECT_EQ(dense->step, 201u);
 }
