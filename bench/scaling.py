@@ -408,7 +408,7 @@ def lammps_table(a, probs, lmp):
     the physics of the last runs, and both codes' 10^6-over-10^4 cost ratio."""
     tol = pc.problem_table()["packing"].physics_tol
     pinned = any(x["cpu"] is not None for v in lmp.values() for x in v)
-    print(f"\nLAMMPS on the same gases (one rank, the same data files and steps; "
+    print(f"\nLAMMPS on the same {'beds' if a.bed else 'gases'} (one rank, the same data files and steps; "
           f"{'pinned, repeat r on core r mod 2, against cohdem on that core in that repeat' if pinned else 'unpinned'})")
     print("| particles | LAMMPS particle-steps/s (median) | ns per particle-step, LAMMPS | cohdem (one thread) | "
           "cohdem / LAMMPS (paired) | LAMMPS bytes per particle | physics (last runs) |")

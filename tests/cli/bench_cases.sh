@@ -4,7 +4,7 @@
 # bench/model_cost.py build it, passes `cohdem check` (time-step audit included), runs a few
 # steps (the packed bed: its contacts and momentum by construction), model_cost.py prints its four rows, instructions.py counts a small packing,
 # contact_instructions.py the force loop's instructions per contact of two laws,
-# scaling.py gives its table for a small gas (with --ceiling and --per-core),
+# scaling.py gives its table for a small gas (with --ceiling and --per-core) and a small bed,
 # peer_compare.py pins its rounds to the cores, contention.py runs it beside a memory hog,
 # ab.py pairs two binaries' runs (an A/A control), and targets.py measures and judges issue
 # 6's targets (its --quick run, with scaling.py --lammps through a stand-in lmp, and its verdicts
@@ -168,6 +168,16 @@ if os.access('$bench_bin', os.X_OK):
         ok = ok and (P['speedup_' + c] is None) == (P['runs'][c] == 0)
         ok = ok and (P['runs'][c] == 0 or abs(P['speedup_' + c] - rows[1]['speedup_mean_core']) < 1e-9)
 sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --ceiling --per-core ${placement[*]:+--placement}"; else echo "FAIL scaling.py"; tail -5 "$work/sc.log"; fail=$((fail+1)); fi
+# scaling.py --bed end to end (the packed bed of 10^3 spheres, 3 steps, one thread): its own
+# cases (keys b<N>), one row of 1,000 spheres holding 3 contacts each (by construction).
+if python3 "$src/bench/scaling.py" --bed --sizes 1000 --threads 1 --steps 3 --repeat 1 --cohdem "$bin" \
+     --out "$work/scb" > "$work/scb.log" 2>&1 &&
+   python3 -c "
+import json, os, sys
+rows = json.load(open('$work/scb/scaling.json'))['rows']
+ok = len(rows) == 1 and rows[0]['particles'] == 1000 and rows[0]['contacts'] == 3000 and rows[0]['particle_steps_per_s'] > 0
+ok = ok and os.path.exists('$work/scb/b1000.toml') and not os.path.exists('$work/scb/p1000.toml')
+sys.exit(0 if ok else 1)"; then pass=$((pass+1)); echo "ok   scaling.py --bed"; else echo "FAIL scaling.py --bed"; tail -5 "$work/scb.log"; fail=$((fail+1)); fi
 # peer_compare.py's pinning without peers (cohdem alone, the chute, 2 rounds of 3 steps):
 # round r ran on core r mod (cores this process may use), recorded per run; each run's peak
 # resident memory recorded, and bytes per particle between 100 B (less than the particles'
