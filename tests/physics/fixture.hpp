@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/rng.hpp"
 #include "models/registry.hpp"
 #include "sim/system.hpp"
 
@@ -46,6 +47,23 @@ inline InsertSpec box_fill(const Vec3& lo, const Vec3& hi, double rmin, double r
   spec.size.rmax = rmax;
   spec.count = count;
   return spec;
+}
+
+/// A packed bed periodic in x, y and z: nx * nx * nz spheres of radius r on a simple cubic
+/// lattice of spacing 0.999 (2 r) in a box of the lattice's size (the box and its periodicity
+/// set here), so that each sphere presses on its six neighbours with an overlap of 0.002 r,
+/// with velocities `v` times a normal draw per component (seed `seed`). Not prepared.
+inline void fill_periodic_lattice(System& s, int nx, int nz, double r, double v, uint64_t seed) {
+  const double a = 0.999 * 2 * r;
+  s.cfg.domain.lo = {0, 0, 0};
+  s.cfg.domain.hi = {nx * a, nx * a, nz * a};
+  s.cfg.domain.periodic = {true, true, true};
+  Rng rng(seed);
+  for (int z = 0; z < nz; ++z)
+    for (int y = 0; y < nx; ++y)
+      for (int x = 0; x < nx; ++x)
+        s.add_particle(0, r, {(x + 0.5) * a, (y + 0.5) * a, (z + 0.5) * a},
+                       {v * rng.normal(), v * rng.normal(), v * rng.normal()});
 }
 
 inline Wall plane(const Vec3& point, const Vec3& normal, int material) {

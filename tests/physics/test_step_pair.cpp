@@ -374,17 +374,7 @@ TEST(StepPair, DenseContactsTakePlainSteps) {
   auto make = [](double max_contacts) {
     auto s = make_system({{"glass", 2500, 0, 0}}, "linear", "none", params({{"kn", 2e4}, {"e", 0.5}, {"mu", 0.5}}),
                          5e-6, {0, 0, 0}, 2e-4);
-    const int m = 8;
-    const double a = 0.999 * 2e-3;
-    s->cfg.domain.lo = {0, 0, 0};
-    s->cfg.domain.hi = {m * a, m * a, m * a};
-    s->cfg.domain.periodic = {true, true, true};
-    Rng rng(9);
-    for (int z = 0; z < m; ++z)
-      for (int y = 0; y < m; ++y)
-        for (int x = 0; x < m; ++x)
-          s->add_particle(0, 1e-3, {(x + 0.5) * a, (y + 0.5) * a, (z + 0.5) * a},
-                          {1e-3 * rng.normal(), 1e-3 * rng.normal(), 1e-3 * rng.normal()});
+    fill_periodic_lattice(*s, 8, 8, 1e-3, 1e-3, 9);
     s->cfg.pair_min = 0;
     s->cfg.pair_max_contacts = max_contacts;
     s->prepare();

@@ -892,16 +892,7 @@ std::unique_ptr<System> make_periodic_bed(int threads, int nx, int nz) {
                        params({{"kn", 2e5}, {"e", 0.9}, {"mu", 0.5}}), 1e-4, {0, 0, 0}, 0.1);
   s->cfg.threads = threads;
   s->cfg.parallel_min = 0;
-  const double a = 0.999;
-  s->cfg.domain.lo = {0, 0, 0};
-  s->cfg.domain.hi = {nx * a, nx * a, nz * a};
-  s->cfg.domain.periodic = {true, true, true};
-  Rng rng(11);
-  for (int z = 0; z < nz; ++z)
-    for (int y = 0; y < nx; ++y)
-      for (int x = 0; x < nx; ++x)
-        s->add_particle(0, 0.5, {(x + 0.5) * a, (y + 0.5) * a, (z + 0.5) * a},
-                        {0.01 * rng.normal(), 0.01 * rng.normal(), 0.01 * rng.normal()});
+  fill_periodic_lattice(*s, nx, nz, 0.5, 0.01, 11);
   s->prepare();
   return s;
 }
