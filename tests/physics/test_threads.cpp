@@ -887,12 +887,13 @@ namespace {
 // bench/bed.toml): nx * nx * nz spheres of d = 1 on a simple cubic lattice of spacing 0.999
 // in a box of the lattice's size, each pressing on its six neighbours (overlap 0.001), with
 // small random velocities, on `threads` threads.
-std::unique_ptr<System> make_periodic_bed(int threads, int nx, int nz) {
+std::unique_ptr<System> make_periodic_bed(int threads, int nx, int nz, double extra_z = 0) {
   auto s = make_system({{"grain", 1.0, 0, 0}}, "linear", "none",
                        params({{"kn", 2e5}, {"e", 0.9}, {"mu", 0.5}}), 1e-4, {0, 0, 0}, 0.1);
   s->cfg.threads = threads;
   s->cfg.parallel_min = 0;
   fill_periodic_lattice(*s, nx, nz, 0.5, 0.01, 11);
+  s->cfg.domain.hi.z += extra_z;  // a gap of extra_z at the seam
   s->prepare();
   return s;
 }
@@ -939,4 +940,16 @@ TEST(Threads, TriplyPeriodicBedKeepsItsPartnersNearInOrder) {
   EXPECT_EQ(two->contact_count(), 3 * n);
   std::printf("[info] periodic bed: %zu spheres, widest reach %ld, span %ld, %llu of %llu calls chained\n", n, reach,
               ps.span, (unsigned long long)ps.chained_calls, (unsigned long long)ps.timed_calls);
+  // Folded, the particles' heights jump along the order between the bottom and the top of
+  // the bed (about 29 d); with a gap of 2 d at the seam (more than the cutoff of 1.1 d), where
+  // no pair can cross it, the order stays plain: the height falls from one particle to the
+  // next only within a plane of cells (less than its 1.1 d).
+  auto largest_drop = [](const System& s) {
+    double d = 0;
+    for (size_t i = 1; i < s.particles.size(); ++i) d = std::max(d, s.particles.x[i - 1].z - s.particles.x[i].z);
+    return d;
+  };
+  EXPECT_GT(largest_drop(*one), 10.0);
+  auto gap = make_periodic_bed(1, nx, nz, 2.0);
+  EXPECT_LT(largest_drop(*gap), 1.2);
 }
