@@ -25,6 +25,15 @@ import random
 import sys
 
 
+def write_data(path, title, box, atoms, vel):
+    """A LAMMPS data file (atom_style sphere, one atom type) of the box [0, box) and its atoms'
+    and velocities' lines."""
+    with open(path, "w") as f:
+        f.write(f"{title}\n\n{len(atoms)} atoms\n\n1 atom types\n\n")
+        f.write("".join(f"0 {b:.9f} {d}lo {d}hi\n" for b, d in zip(box, "xyz")) + "\n")
+        f.write("Atoms\n\n" + "\n".join(atoms) + "\n\nVelocities\n\n" + "\n".join(vel) + "\n")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("n", type=int)
@@ -53,10 +62,8 @@ def main():
         atoms.append(f"{k + 1} 1 1.0 1.0 {x:.9f} {y:.9f} {z:.9f}")
         vel.append(f"{k + 1} " + " ".join(f"{rng.uniform(-0.5, 0.5):.9f}" for _ in range(3)) + " 0 0 0")
     zhi = 0.51 + nz * s + 1.0
-    with open(a.out, "w") as f:
-        f.write(f"poured packing benchmark: {a.n} spheres, lattice {side}x{side}x{nz}, spacing {s} (bench/gen_packing.py)\n\n")
-        f.write(f"{a.n} atoms\n\n1 atom types\n\n0 {L:.9f} xlo xhi\n0 {L:.9f} ylo yhi\n0 {zhi:.9f} zlo zhi\n\n")
-        f.write("Atoms\n\n" + "\n".join(atoms) + "\n\nVelocities\n\n" + "\n".join(vel) + "\n")
+    write_data(a.out, f"poured packing benchmark: {a.n} spheres, lattice {side}x{side}x{nz}, spacing {s} (bench/gen_packing.py)",
+               (L, L, zhi), atoms, vel)
     print(f"{a.out}: {a.n} spheres, box {L:.4f} x {L:.4f} (periodic) x {zhi:.4f}")
 
 
@@ -73,10 +80,8 @@ def bed(a, rng):
         iy, ix = divmod(rem, side)
         atoms.append(f"{k + 1} 1 1.0 1.0 {(ix + 0.5) * s:.9f} {(iy + 0.5) * s:.9f} {(iz + 0.5) * s:.9f}")
         vel.append(f"{k + 1} " + " ".join(f"{rng.uniform(-0.01, 0.01):.9f}" for _ in range(3)) + " 0 0 0")
-    with open(a.out, "w") as f:
-        f.write(f"packed bed benchmark: {n} spheres, lattice {side}^3, spacing {s} (bench/gen_packing.py --bed)\n\n")
-        f.write(f"{n} atoms\n\n1 atom types\n\n0 {L:.9f} xlo xhi\n0 {L:.9f} ylo yhi\n0 {L:.9f} zlo zhi\n\n")
-        f.write("Atoms\n\n" + "\n".join(atoms) + "\n\nVelocities\n\n" + "\n".join(vel) + "\n")
+    write_data(a.out, f"packed bed benchmark: {n} spheres, lattice {side}^3, spacing {s} (bench/gen_packing.py --bed)",
+               (L, L, L), atoms, vel)
     print(f"{a.out}: {n} spheres, box {L:.4f} (periodic in x, y, z)")
 
 
