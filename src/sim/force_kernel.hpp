@@ -62,6 +62,25 @@ COHDEM_INLINE void prefetch_record(const T* p) {
   if constexpr (sizeof(T) > 8) __builtin_prefetch(reinterpret_cast<const char*>(p) + sizeof(T) - 1, kWrite, 3);
 }
 
+/// Asks for the reverse sums, velocity and spin of the rows of a batch's picked entries,
+/// hrow[0..nh) (for writing, reading, reading). Called for a batch with fewer contacts than
+/// a quarter of its rows (a dilute gas: about one in eight rows holds one), where the
+/// contact's put is the first touch of its row's lines in the step, a row or more ahead of
+/// the finish's own prefetches (kFinishAhead): at 10^6 particles they come from memory.
+/// In a dense batch the rows' lines follow each other and the hardware brings them. Out of
+/// line: inline, the test on every batch's count changed the dense batches' code (the 10^6
+/// bed 0.975x). The 10^6 gas 1.02-1.04x on one and two threads, the same bits
+/// (docs/performance-history.md, sixty-eighth round).
+__attribute__((noinline)) inline void prefetch_rows(const uint32_t* hrow, const uint32_t nh, const PairResult* rev,
+                                                    const Vec3* v, const Vec3* omega) {
+  for (uint32_t h = 0; h < nh; ++h) {
+    const uint32_t i = hrow[h];
+    prefetch_record<1>(rev + i);
+    prefetch_record<0>(v + i);
+    prefetch_record<0>(omega + i);
+  }
+}
+
 template <class Law>
 void ContactModelImpl<Law>::compute(ForceContext& c) const {
   ParticleStore& P = c.p;
@@ -281,6 +300,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         prefetch_record<0>(omega + j);
       };
       constexpr uint32_t D = 8;
+      if (pref && nh * 4 < uint32_t(i1 - i0 + 1)) prefetch_rows(hrow, nh, rev, v, omega);
       if (pref)
         for (uint32_t h = 0; h < std::min(nh, D); ++h) pf(h);
       // One contact's result into the sums, in list order: the force and torque on i into

@@ -13,7 +13,9 @@
 # AVX2 alone for the same reason), the region function from its parallel region and a vector's destructor (once a call each),
 # the contacts of the laws with lanes (linear_, hertz_, mepa_lanes_avx2 and _avx512 and their
 # _epsd_ forms, and hertz_sds_: one call per 16 contacts, AVX2 or AVX-512 alone for the same reason), the highest partner of a
-# batch in the two-step sweep (max_index_avx2: one call per batch, AVX2 alone) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
+# batch in the two-step sweep (max_index_avx2: one call per batch, AVX2 alone), the prefetch of
+# a sparse batch's rows (prefetch_rows: one call per batch with few contacts, kept out of line
+# so that the dense batches' code is as before) and the cold exception paths. Libraries (libm's pow, cbrt, cos;
 # libgomp; operator new/delete) are allowed. Skipped, saying so, for a build that is not
 # optimized (Debug), where nothing is inlined.
 set -u
@@ -38,7 +40,7 @@ objdump -d --no-show-raw-insn -C "$bin" | awk '
   }
   k && /\tcall/ {
     t = $0; sub(/.*call +[0-9a-f]* */, "", t)
-    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::screen_avx512\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::max_index_avx2\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd|_sds)?_lanes_avx(2|512)\(/ || (t ~ /::compute\(cohdem::ForceContext&\) const::\{lambda\(/ && t ~ /State\*/) || t ~ /std::vector<.*>::~vector\(\)/) next
+    if (t ~ /@plt>/ || t ~ /operator (new|delete)/ || t ~ /std::__throw/ || t ~ /\[clone \.cold\]/ || t ~ /cohdem::Wall::/ || t ~ /cohdem::PairSlots::/ || t ~ />::wall_contacts\(/ || t ~ /cohdem::screen_avx2\(/ || t ~ /cohdem::screen_avx512\(/ || t ~ /cohdem::finish_free_avx2\(/ || t ~ /cohdem::max_index_avx2\(/ || t ~ /cohdem::prefetch_rows\(/ || t ~ /cohdem::(linear|hertz|mepa)(_epsd|_sds)?_lanes_avx(2|512)\(/ || (t ~ /::compute\(cohdem::ForceContext&\) const::\{lambda\(/ && t ~ /State\*/) || t ~ /std::vector<.*>::~vector\(\)/) next
     bad[t]++
   }
   END {
