@@ -73,13 +73,28 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
   // a time; a row's last store runs into the next row's slots, which that row then writes):
   // a group then reads its rows' particles as four plain loads instead of assembling them
   // lane by lane (24 loads and the shuffles to place them: the screening's bottleneck).
+  // A row of at most four entries (most rows of the gas, the chute and the bed) is written
+  // four lanes wide: eight-lane stores at a row's offset, not a multiple of eight, each
+  // straddle two cache lines, and these stores held a quarter of the screening's samples
+  // in the 10^6 gas (perf). The 10^4 gas 1.037x, the chute 1.004x, the same bits
+  // (docs/performance-history.md, sixty-eighth round); four lanes for every row lost 1.7 %
+  // on the chute, whose longer rows then take two rounds of stores.
   uint32_t erow[kBatch + 8];
   alignas(64) double ex[kBatch + 8], ey[kBatch + 8], ez[kBatch + 8], erad[kBatch + 8];
   auto mark = [&](const long i, const uint32_t k0, const uint32_t k1)
                   __attribute__((target("avx512f,avx512vl"), always_inline)) {
-    const __m256i rv = _mm256_set1_epi32(int32_t(i));
     const __m512d bx = _mm512_set1_pd(x[i].x), by = _mm512_set1_pd(x[i].y), bz = _mm512_set1_pd(x[i].z),
                   br = _mm512_set1_pd(radius[i]);
+    if (k1 - k0 <= 4) {
+      const uint32_t o = k0 - kb;
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(erow + o), _mm_set1_epi32(int32_t(i)));
+      _mm256_storeu_pd(ex + o, _mm512_castpd512_pd256(bx));
+      _mm256_storeu_pd(ey + o, _mm512_castpd512_pd256(by));
+      _mm256_storeu_pd(ez + o, _mm512_castpd512_pd256(bz));
+      _mm256_storeu_pd(erad + o, _mm512_castpd512_pd256(br));
+      return;
+    }
+    const __m256i rv = _mm256_set1_epi32(int32_t(i));
     for (uint32_t k = k0; k < k1; k += 8) {
       const uint32_t o = k - kb;
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(erow + o), rv);
@@ -92,7 +107,7 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
   for (long i = i0; i <= i1 && i < b; ++i)
     mark(i, std::max(start[i], kb), std::min(start[i + 1], ke));
   // The lanes past the batch's end read a valid row (and are not picked).
-  mark(i0, ke, ke + 1);
+  mark(i0, ke, ke + 8);
   // Groups of eight read whole groups inside the list only; the list's last entries singly.
   const uint32_t full = s.entries >= 8 ? s.entries - 7 : 0;
   const uint32_t kg = std::min(ke, full);
