@@ -69,7 +69,7 @@ COHDEM_INLINE void prefetch_record(const T* p) {
 /// the finish's own prefetches (kFinishAhead): at 10^6 particles they come from memory.
 /// In a dense batch the rows' lines follow each other and the hardware brings them. Out of
 /// line: inline, the test on every batch's count changed the dense batches' code (the 10^6
-/// bed 0.975x). The 10^6 gas 1.02-1.04x on one and two threads, the same bits
+/// bed 0.975x). The 10^6 gas 1.00-1.04x on one and two threads, the same bits
 /// (docs/performance-history.md, sixty-eighth round).
 __attribute__((noinline)) inline void prefetch_rows(const uint32_t* hrow, const uint32_t nh, const PairResult* rev,
                                                     const Vec3* v, const Vec3* omega) {

@@ -77,7 +77,7 @@ COHDEM_AVX512 uint32_t screen_avx512(const ScreenInput& s, const long i0, const 
   // four lanes wide: eight-lane stores at a row's offset, not a multiple of eight, each
   // straddle two cache lines, and these stores held a quarter of the screening's samples
   // in the 10^6 gas (perf). The 10^4 gas 1.037x, the chute 1.004x, the same bits
-  // (docs/performance-history.md, sixty-eighth round); four lanes for every row lost 1.7 %
+  // (docs/performance-history.md, sixty-eighth round); four lanes for every row lost 1.2-1.7 %
   // on the chute, whose longer rows then take two rounds of stores.
   uint32_t erow[kBatch + 8];
   alignas(64) double ex[kBatch + 8], ey[kBatch + 8], ez[kBatch + 8], erad[kBatch + 8];
