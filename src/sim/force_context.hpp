@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -64,8 +65,14 @@ COHDEM_INLINE long block_begin(long n, long t, long nt) { return n * t / nt; }
 /// it: rows dep_lo[q] (from the list build) to q's own, the last (each pair lies in the row
 /// of its lower index). That block's thread alone scatters into q's reverse sums; the pairs
 /// of the other particles are stored and gathered.
-COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, long b) {
-  return long(dep_lo[q]) >= a && long(q) < b;
+/// Where the widest reach of a row is known (`span`: q - dep_lo[q] <= span for every q,
+/// PairSlots::span), a particle `span` or more rows past a is local without reading
+/// dep_lo[q]: the force loop tests every contact's partner, a plane of cells ahead of the
+/// row, where that load came from beyond the caches (docs/performance-history.md,
+/// sixty-eighth round).
+COHDEM_INLINE bool local_to_block(const uint32_t* dep_lo, uint32_t q, long a, long b,
+                                  long span = std::numeric_limits<long>::max()) {
+  return long(q) < b && (long(q) - a >= span || long(dep_lo[q]) >= a);
 }
 
 /// An allocator that leaves the elements a resize adds uninitialised (trivial types only

@@ -252,15 +252,11 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
         if (two) pcall = c.slots->next_pair_call(nt);
       }  // implicit barrier: every thread sees the blocks, res, slot_of, the lists and epoch
     }
-    // A particle `span` or more rows past the piece's start has every row of its pairs in
-    // the piece (dep_lo[q] >= q - span, PairSlots::span), so dep_lo[q] is read only for the
-    // particles near the start: for a partner j a plane of cells ahead it is a load from
-    // beyond the caches (at 10^6 particles its line is first met there), which the
-    // contacts' loop waited on (perf, the 10^6 gas on two threads). Without a PairSlots the
-    // span is not known: always read.
+    // With a PairSlots its span lets the test skip dep_lo[q] away from the piece's start
+    // (local_to_block); without one the span is not known and dep_lo is always read.
     const long span_known = share ? c.slots->span : std::numeric_limits<long>::max();
     auto local = [&](const uint32_t q, const long a, const long b) __attribute__((always_inline)) {
-      return long(q) < b && (long(q) - a >= span_known || long(dep_lo[q]) >= a);
+      return local_to_block(dep_lo, q, a, b, span_known);
     };
     // This thread's own-row buffer and the results in it (OwnAt; set up below).
     OwnResult* own_buf = nullptr;
