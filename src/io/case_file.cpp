@@ -251,10 +251,14 @@ Case parse(toml::table& root, const std::string& file) {
     const auto pmin = s.integer("parallel_min", 4000);
     if (pmin < 0) s.fail("parallel_min", "expected a particle count >= 0");
     c.cfg.parallel_min = long(pmin);
-    // Two steps in one sweep of the force loop (System::step_pair; the same results).
+    // Several steps in one sweep of the force loop (System::step_sweep; the same results).
     const bool pairs = s.boolean("pair_steps", true);
     c.cfg.pair_min = long(s.integer("pair_min", 65536, 1));
     if (!pairs) c.cfg.pair_min = -1;
+    const auto sweep = s.integer("sweep_steps", 4, 2);
+    if (sweep > 4) s.fail("sweep_steps", "expected 2, 3 or 4 steps in one sweep of the force loop");
+    c.cfg.sweep_steps = int(sweep);
+    c.cfg.sweep_min = long(s.integer("sweep_min", 500000, 1));
     c.seed = uint64_t(s.integer("seed", 1));
     c.audit_velocity = s.num("audit_velocity", 0.0, 0, kInf, false, "m/s");
     s.finish();

@@ -312,16 +312,19 @@ int run_case(Case c, const RunOptions& opt) {
                s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
   {
     const int nt = c.cfg.threads > 0 ? c.cfg.threads : omp_get_max_threads();
-    // Two steps per sweep (System::step_pair): whether the size allows it; the run's walls,
-    // pours and outputs decide step by step (summary.json's step_pairs counts them).
-    const std::string pairs = c.cfg.pair_min < 0        ? "off (pair_steps = false)"
-                              : System::pairs_off_by_env() ? "off (COHDEM_PAIR=0)"
-                              : s.serial_blocks()          ? "off (COHDEM_SERIAL_BLOCKS=1)"
-                              : c.thermal.enabled          ? "off (thermal model)"
-                              : !s.pairs_fit_size()
-                                  ? fmt::format("off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
-                                  : "where the run allows and the contacts are at most 1 a particle (summary.json: step_pairs)";
-    spdlog::info("force loop: {} thread(s), list screening and contact lanes {}, two steps per sweep {}", nt,
+    // Several steps per sweep (System::step_sweep): whether the size allows it; the run's
+    // walls, pours and outputs decide step by step (summary.json's step_pairs counts them).
+    const std::string pairs =
+        c.cfg.pair_min < 0          ? "several steps per sweep off (pair_steps = false)"
+        : System::pairs_off_by_env() ? "several steps per sweep off (COHDEM_PAIR=0)"
+        : s.serial_blocks()          ? "several steps per sweep off (COHDEM_SERIAL_BLOCKS=1)"
+        : c.thermal.enabled          ? "several steps per sweep off (thermal model)"
+        : !s.pairs_fit_size()
+            ? fmt::format("several steps per sweep off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
+            : fmt::format("up to {} steps per sweep where the run allows and the contacts are at most 1 a particle "
+                          "(summary.json: step_pairs)",
+                          s.sweep_steps());
+    spdlog::info("force loop: {} thread(s), list screening and contact lanes {}, {}", nt,
                  screen_avx512_enabled()
                      ? "AVX-512, eight at a time (COHDEM_SIMD=avx2 selects AVX2, four, COHDEM_SIMD=0 the scalar code)"
                  : screen_avx2_enabled() ? "AVX2, four at a time (COHDEM_SIMD=0 selects the scalar code)"
@@ -432,13 +435,17 @@ int run_case(Case c, const RunOptions& opt) {
     const bool progress_due =
         !opt.quiet && std::chrono::duration<double>(now - last).count() >= c.output.progress_interval;
     const bool open_k = !(k == nsteps || series_due || frame_due || ck_due || stop_due || progress_due);
-    // Two steps at once (System::step_pair: the same results) when nothing is written after
-    // this one or the next; the clock's events (checkpoint, progress, wall-time limit) are
-    // then looked at one step later.
+    // Several steps at once (System::step_sweep: the same results) when nothing is written
+    // after this one or the next ones; the clock's events (checkpoint, progress, wall-time
+    // limit) are then looked at a few steps later.
     if (open_k && s.mid_step() && k + 1 < nsteps && !series_at(k + 1) && !frame_at(k + 1) && s.pairs_allowed()) {
-      s.step_pair();
-      particle_steps += 2 * s.particles.size();
-      ++k;
+      // Up to sweep_steps() (four on one thread) while nothing is written after any of them.
+      int g = 2;
+      while (g < s.sweep_steps() && k + uint64_t(g) < nsteps && !series_at(k + uint64_t(g)) && !frame_at(k + uint64_t(g)))
+        ++g;
+      const int took = s.step_sweep(g);
+      particle_steps += uint64_t(took) * s.particles.size();
+      k += uint64_t(took - 1);
       continue;
     }
     s.step_once(open_k);
@@ -488,11 +495,15 @@ int run_case(Case c, const RunOptions& opt) {
   j["loop_time_s"] = loop_s;
   j["final_checkpoint_s"] = std::chrono::duration<double>(t_end - t_loop).count();
   j["particle_steps_per_s"] = loop_s > 0 ? double(particle_steps) / loop_s : 0.0;
-  // System::step_pair: pairs of steps evaluated in one sweep, undone (a rebuild fell between
-  // them) and the steps taken again after those; of the pairs, those evaluated near a
-  // rebuild on the displacements' forecast, and the calls there that took plain steps; the
-  // calls that took plain steps because the contacts were dense (SimConfig::pair_max_contacts).
+  // System::step_sweep: sweeps of several steps evaluated (`pairs`, whatever their steps;
+  // `steps` the steps in them, `steps_per_sweep` the most a sweep takes now), undone (a
+  // rebuild fell between two of their steps) and the steps taken again after those; of the
+  // sweeps, those evaluated near a rebuild on the displacements' forecast, and the calls
+  // there that took plain steps; the calls that took plain steps because the contacts were
+  // dense (SimConfig::pair_max_contacts).
   j["step_pairs"] = {{"pairs", s.pair_stats().pairs},
+                     {"steps", s.pair_stats().swept_steps},
+                     {"steps_per_sweep", s.sweep_steps()},
                      {"undone", s.pair_stats().replays},
                      {"steps_taken_again", s.pair_stats().replayed_steps},
                      {"forecast", s.pair_stats().forecast},

@@ -630,6 +630,10 @@ struct ForceContext {
   /// with the same lists: the caller must take that step only if the lists need no rebuild
   /// after this one (*drift), and undo it otherwise.
   Drift* drift2 = nullptr;
+  /// With drift2, on one thread only: further steps in the same sweep (System::step_group),
+  /// the third step's displacements into drift_more[0], the fourth's into drift_more[1]
+  /// (null: none). Each step's cursor follows the one before as the second follows the first.
+  Drift* drift_more[2] = {nullptr, nullptr};
   /// Below this many particles the kernel runs on one thread (fork/join costs more than it saves).
   long parallel_min = 0;
   /// Store every live pair's result in `pair` (otherwise only those gathered across thread

@@ -192,7 +192,8 @@ void System::do_pours() {
   }
 }
 
-void System::compute_forces(double kick_h, bool open_next, Drift* second, bool hold_springs) {
+void System::compute_forces(double kick_h, bool open_next, Drift* second, bool hold_springs, Drift* third,
+                            Drift* fourth) {
   const size_t np = nl.pair_count(), nw = nl.wall_entry_count();
   const bool record = thermal || cfg.record_contacts;  // per-contact forces and radii
   contacts_recorded_ = record;
@@ -210,7 +211,9 @@ void System::compute_forces(double kick_h, bool open_next, Drift* second, bool h
     open_drift_ = Drift{};
     ctx.open_dt = cfg.dt;
     ctx.drift = &open_drift_;
-    ctx.drift2 = second;  // step_pair: the next step in the same sweep
+    ctx.drift2 = second;  // step_sweep: the next steps in the same sweep
+    ctx.drift_more[0] = third;
+    ctx.drift_more[1] = fourth;
   }
   ctx.keep_pair = record;
   ctx.slots = &slots_;
@@ -270,7 +273,7 @@ void System::compute_forces(double kick_h, bool open_next, Drift* second, bool h
 }
 
 void System::step_once(bool open_next) {
-  snap_.valid = false;  // a step of its own: step_pair's snapshot no longer leads here by pairs alone
+  snap_.valid = false;  // a step of its own: step_sweep's snapshot no longer leads here by pairs alone
   begin_step();
   end_step(open_next);
 }
@@ -384,6 +387,27 @@ bool System::pairs_off_by_env() {
     return e != nullptr && std::string(e) == "0";
   }();
   return off;
+}
+
+int System::sweep_steps_by_env() {
+  static const int k = [] {
+    const char* e = std::getenv("COHDEM_SWEEP");
+    if (e == nullptr || *e == '\0') return 0;
+    char* end = nullptr;
+    const long v = std::strtol(e, &end, 10);
+    if (*end != '\0' || v < 2 || v > 4)
+      throw RunError(std::string("environment variable COHDEM_SWEEP: expected 2, 3 or 4 steps a sweep, got '") + e + "'");
+    return int(v);
+  }();
+  return k;
+}
+
+int System::sweep_steps() const {
+  const long n = long(particles.size());
+  if (n > cfg.parallel_min && omp_get_max_threads() > 1) return 2;  // the force loop on several threads
+  const int env = sweep_steps_by_env();
+  if (env > 0) return env;
+  return n >= cfg.sweep_min ? std::clamp(cfg.sweep_steps, 2, 4) : 2;
 }
 
 bool System::serial_blocks_by_env() {
@@ -505,7 +529,7 @@ void System::take_snapshot() {
   snap_.time = time;
   snap_.step = step;
   snap_.builds = nl.stats.builds;
-  snap_.pairs = 0;
+  snap_.swept = 0;
   snap_.valid = true;
 }
 
@@ -534,24 +558,26 @@ bool System::contacts_dense() {
   return dense_;
 }
 
-void System::step_pair() {
+int System::step_sweep(const int k) {
+  if (k < 2 || k > 4) throw std::logic_error("System::step_sweep: 2 to 4 steps, not " + std::to_string(k));
   const bool allowed = pairs_allowed();
   if (!allowed || contacts_dense()) {
     pair_stats_.dense_plain += allowed;
-    step_once(true);
-    step_once(true);
-    return;
+    const int K = std::min(k, sweep_steps());
+    for (int q = 0; q < K; ++q) step_once(true);
+    return K;
   }
   const uint64_t builds = nl.stats.builds;
+  int K = std::min(k, sweep_steps());  // the steps of this sweep (fewer near a rebuild: below)
   begin_step();  // the first step's opening is done; the rebuild decision before it
   // Near a rebuild (the displacements since the build past SimConfig::pair_margin of what
-  // triggers one): plain steps. A snapshot is taken after every list build
-  // and every kSnapPairs pairs since (its cost: a copy of the positions, velocities and
+  // triggers one): plain steps. A snapshot is taken after every list build and every
+  // kSnapSteps steps taken in sweeps since (its cost: a copy of the positions, velocities and
   // spins and of the history's live records, and a read of the rest: 10-18 ms at 10^6
-  // particles, about one step; the first, whose pages are new, 180 ms). Every 32 pairs it
-  // took 5 % of a two-thread run at 10^6; every 128, a pair undone takes at most 256 steps
+  // particles, about one step; the first, whose pages are new, 180 ms). Every 64 steps it
+  // took 5 % of a two-thread run at 10^6; every 256, a sweep undone takes at most 256 steps
   // again (none was undone in 1000 steps of the 10^6 gas: the margin keeps it rare).
-  constexpr uint64_t kSnapPairs = 128;
+  constexpr uint64_t kSnapSteps = 256;
   // Plain steps too on several threads where a block holds fewer than two spans of rows
   // (PairSlots::chained: a block's tail and head apart; the force loop's set-up makes the
   // same split).
@@ -561,49 +587,71 @@ void System::step_pair() {
     slots_.plan(nl, n, nt);
     return !slots_.chained;
   };
-  // Past the margin, a pair only where the measure (NeighborList::rebuild_measure) plus
-  // SimConfig::pair_ahead (4) times its growth per step over the last two intervals stays
-  // below the trigger: the pair's first step moves the particles once more before its second
-  // step's forces (at 10^6 particles on one thread the plain steps near each rebuild were a
-  // fifth of the steps). Close to the trigger (within kClose steps of growth) the snapshot is
-  // renewed every kCloseSnapPairs pairs, so that a pair undone there takes few steps again.
+  // Past the margin, a sweep only where the measure (NeighborList::rebuild_measure) plus
+  // SimConfig::pair_ahead (4) times its growth per step over the last two intervals, for
+  // each step the sweep moves the particles before its last step's forces, stays below the
+  // trigger (at 10^6 particles on one thread the plain steps near each rebuild were a fifth
+  // of the steps). A sweep of more than two steps is taken only where the growth is known
+  // and the forecast keeps its last step clear too, and cut short where it does not (below
+  // the margin as well, where a pair goes without looking ahead, as it always did): a
+  // sweep of four steps with the growth unknown, after each build or each sweep undone, was
+  // undone again and again where lists are rebuilt every few steps (the box of
+  // tests/physics/test_step_pair.cpp). Close to the trigger (within kClose steps of growth)
+  // the snapshot is renewed every kCloseSnapSteps steps, so that a sweep undone there takes
+  // few steps again.
   constexpr double kClose = 32;
-  constexpr uint64_t kCloseSnapPairs = 8;
+  constexpr uint64_t kCloseSnapSteps = 16;
   bool forecast = false, close = false, near = false;
   if (nl.stats.builds == builds) {  // no build in begin_step: the drift is since the last one
     const double m = nl.rebuild_measure(open_drift_, walls);
     trend_.note(m, step, nl.stats.builds);
+    const double g = trend_.growth();
+    // Whether a sweep of q steps is forecast to stay clear of the rebuild.
+    auto clear = [&](const int q) { return g >= 0 && m + cfg.pair_ahead * double(q - 1) * g <= cfg.skin; };
     if (m > cfg.pair_margin * cfg.skin) {
-      const double g = trend_.growth();
-      forecast = g >= 0 && m + cfg.pair_ahead * g <= cfg.skin;
+      while (K > 2 && !clear(K)) --K;
+      forecast = clear(K);
       close = forecast && m + kClose * g > cfg.skin;
       near = !forecast;
+    } else {
+      while (K > 2 && !clear(K)) --K;
     }
+  } else {
+    K = 2;  // a build in begin_step: the growth since it is not known yet
   }
   if (near || short_blocks()) {
     pair_stats_.near_plain += near;
     snap_.valid = false;
     end_step(true);
-    step_once(true);
-    return;
+    for (int q = 1; q < K; ++q) step_once(true);
+    return K;
   }
-  if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.pairs >= kSnapPairs ||
-      (close && snap_.pairs >= kCloseSnapPairs))
+  if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.swept >= kSnapSteps ||
+      (close && snap_.swept >= kCloseSnapSteps))
     take_snapshot();
-  // Both steps in one sweep of the force loop (ForceContext::drift2); open_drift_ gets the
-  // first step's displacements, `second` the second's.
+  // All K steps in one sweep of the force loop (ForceContext::drift2, drift_more): `at[q]`
+  // gets the displacements since the build of the positions step q + 1 opens with
+  // (open_drift_ the second step's, ...; the last, those the step after the sweep opens with).
   const double dt = cfg.dt;
-  Drift second;
-  compute_forces(0.5 * dt, true, &second);
+  Drift second, third, fourth;
+  Drift* const at[4] = {&open_drift_, &second, &third, &fourth};
+  compute_forces(0.5 * dt, true, &second, false, K >= 3 ? &third : nullptr, K >= 4 ? &fourth : nullptr);
   ++pair_stats_.pairs;
   pair_stats_.forecast += forecast;
-  const double m2 = nl.rebuild_measure(open_drift_, walls);  // the second step's positions
-  if (m2 > cfg.skin) {  // rebuild_due
-    // The lists needed a rebuild between the two steps: back to the snapshot, and the steps
-    // since it again one at a time (the same arithmetic: the same states, the rebuild where
-    // plain steps take it).
+  // The positions each of steps 2..K opened with: a step whose lists needed a rebuild undoes
+  // the sweep. m: the last of them, for the forecast's trend.
+  bool due = false;
+  double m = 0;
+  for (int q = 0; q + 1 < K; ++q) {
+    m = nl.rebuild_measure(*at[q], walls);
+    due = due || m > cfg.skin;  // rebuild_due
+  }
+  if (due) {
+    // The lists needed a rebuild between two steps of the sweep: back to the snapshot, and
+    // the steps since it again one at a time (the same arithmetic: the same states, the
+    // rebuild where plain steps take it).
     ++pair_stats_.replays;
-    const uint64_t target = step + 1;
+    const uint64_t target = step + uint64_t(K - 1);
     particles.x = snap_.x;
     particles.v = snap_.v;
     particles.omega = snap_.omega;
@@ -620,19 +668,23 @@ void System::step_pair() {
     }
     snap_.valid = false;
     trend_ = Trend{};
-    return;
+    return K;
   }
-  trend_.note(m2, step + 1, nl.stats.builds);
-  ++snap_.pairs;
-  // What plain steps do between and after the two force loops, for walls that stay where
-  // they are (their loads are the second step's: the wall entries' results were overwritten).
+  trend_.note(m, step + uint64_t(K - 1), nl.stats.builds);
+  snap_.swept += uint64_t(K);
+  pair_stats_.swept_steps += uint64_t(K);
+  // What plain steps do between and after the force loops, for walls that stay where they
+  // are (their loads are the last step's: the wall entries' results were overwritten).
+  for (int q = 1; q < K; ++q) {
+    control_walls(dt);
+    move_wall_geometry(dt);
+    time += dt;
+    ++step;
+  }
   control_walls(dt);
-  move_wall_geometry(dt);
-  time += dt;
-  ++step;
-  control_walls(dt);
-  open_drift_ = second;
+  open_drift_ = *at[K - 1];
   opened_ = true;
+  return K;
 }
 
 void System::run(uint64_t nsteps, const std::function<void(const System&)>& after_step) {

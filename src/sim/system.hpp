@@ -48,13 +48,24 @@ struct SimConfig {
   /// stresses are measured; always on with a thermal model). Off, the one-thread force loop
   /// writes no per-pair results at all (less memory traffic).
   bool record_contacts = false;
-  /// From this many particles per thread up, System::step_pair evaluates two steps in one
+  /// From this many particles per thread up, System::step_sweep evaluates two steps or more in one
   /// sweep of the force loop where it may (walls at rest, no pours, thermal model or
   /// recording; on several threads, blocks of at least two planes' rows,
   /// PairSlots::chained); below, and when negative, it takes them one at a time (case file:
   /// `[simulation] pair_min`, and `pair_steps = false` for negative). The environment
   /// variable COHDEM_PAIR=0 turns it off too (for comparisons). Results are the same bits.
   long pair_min = 65536;
+  /// At most this many steps (2 to 4) in one sweep where the force loop runs on one thread
+  /// and the particles number sweep_min or more (System::step_sweep; otherwise two: on
+  /// several threads the blocks' hand-offs follow two cursors). Each further step's cursor
+  /// follows the one before a plane of cells behind, on data still in the caches: on the
+  /// development VM the gas on one thread ran 1.10x as fast with four steps a sweep as with
+  /// two at 10^6 and 6 x 10^5 particles, but 0.955x at 3 x 10^5 and 0.98x at 10^5
+  /// (docs/performance-history.md, sixty-ninth round). Case file: `[simulation]
+  /// sweep_steps`, `sweep_min`; the environment variable COHDEM_SWEEP (2 to 4) sets the steps
+  /// at any size (for comparisons). Results are the same bits.
+  int sweep_steps = 4;
+  long sweep_min = 500000;
   /// Two steps in one sweep only while the live contacts are at most this many a particle
   /// (counted every System::kDenseCheckSteps steps and after each list build): a pair saves
   /// the second step's reads from memory, which is what a dilute problem's step waits for (the
@@ -63,14 +74,15 @@ struct SimConfig {
   /// 0.94x on two at 10^6, docs/performance-history.md, sixty-seventh round). Tests raise it.
   double pair_max_contacts = 1.0;
   /// Below this fraction of what triggers a list rebuild (the displacements since the
-  /// build, NeighborList::rebuild_measure), step_pair evaluates pairs without looking ahead;
-  /// above it, only where the measure's growth over the last steps, four times over, stays
-  /// below the trigger for the pair's step (a rebuild falling between the two steps of a pair
-  /// undoes the pair; a snapshot is taken close to the trigger so that few steps are taken
+  /// build, NeighborList::rebuild_measure), step_sweep evaluates sweeps without looking ahead;
+  /// above it, only where the measure's growth over the last steps, four times over for each
+  /// step the sweep looks ahead, stays below the trigger for its last step (a rebuild falling
+  /// between two steps of a sweep undoes the sweep; a snapshot is taken close to the trigger so that few steps are taken
   /// again). 1: pairs up to the rebuild (tests use it to take the way back).
   double pair_margin = 0.75;
   /// Past pair_margin, how many steps of the measure's recent growth the forecast adds
-  /// before comparing with the trigger (the pair's step itself is one): 4 allows the growth
+  /// before comparing with the trigger, for each step a sweep looks ahead (a pair's second
+  /// step: one; a sweep of four: three): 4 allows the growth
   /// to quadruple from one step to the next. Tests set it below 1 to make forecasts fail
   /// and take the way back.
   double pair_ahead = 4;
@@ -138,22 +150,32 @@ class System {
   void step_once(bool open_next = false);
   /// True between a step_once(true) and the next step_once.
   bool mid_step() const { return opened_; }
-  /// Two steps, each as step_once(true), from a mid-step state (after step_once(true) or
-  /// step_pair()), with the same results bit for bit. Where pairs_allowed(), both steps are
-  /// evaluated in one sweep of the force loop (ForceContext::drift2): the second step's
-  /// particles are read about one plane of cells after the first step wrote them, from
-  /// cache, where a whole sweep is not (about 1.1x on a one-thread 10^6-particle gas, 1.04x
-  /// on two threads). If
-  /// the lists turn out to need a rebuild between the two steps, the state goes back to the
-  /// last snapshot (taken after each list build and every 128 pairs) and the steps since are
-  /// taken again one at a time. Near a rebuild (SimConfig::pair_margin) it takes plain
-  /// steps unless the displacements' recent growth shows the pair's step stays clear of it.
-  void step_pair();
-  /// Whether step_pair can evaluate two steps in one sweep now (SimConfig::pair_min).
+  /// k steps (2 to 4; sweep_steps() where that is fewer), each as
+  /// step_once(true), from a mid-step state (after step_once(true) or step_sweep()), with the
+  /// same results bit for bit. Where pairs_allowed(), all of them are evaluated in one sweep
+  /// of the force loop (ForceContext::drift2, drift_more): each step's particles are read
+  /// about one plane of cells after the step before wrote them, from cache, where a whole
+  /// sweep is not (two steps: about 1.15x on a one-thread 10^6-particle gas, 1.04x on two
+  /// threads; four on one thread 1.11x over two). If the lists turn out to need a rebuild
+  /// between two of the steps, the state goes back to the last snapshot (taken after each
+  /// list build and every 256 steps taken in sweeps) and the steps since are taken again one
+  /// at a time. Near a rebuild (SimConfig::pair_margin) it takes plain steps unless the
+  /// displacements' recent growth shows the sweep's last step stays clear of it.
+  /// Returns the steps taken: k, or sweep_steps() where that is fewer.
+  int step_sweep(int k);
+  /// step_sweep(2): two steps.
+  void step_pair() { step_sweep(2); }
+  /// How many steps step_sweep takes in one sweep now, at most: SimConfig::sweep_steps where
+  /// the force loop runs on one thread and the particles number SimConfig::sweep_min or more
+  /// (COHDEM_SWEEP, where set, at any size on one thread), else 2.
+  int sweep_steps() const;
+  /// Whether step_sweep can evaluate several steps in one sweep now (SimConfig::pair_min).
   bool pairs_allowed() const;
-  /// Whether the environment variable COHDEM_PAIR=0 switches step_pair's pairs off (for
+  /// Whether the environment variable COHDEM_PAIR=0 switches step_sweep's sweeps off (for
   /// comparisons; the case file's `pair_steps = false` does the same).
   static bool pairs_off_by_env();
+  /// SimConfig::sweep_steps from the environment variable COHDEM_SWEEP (2 to 4; 0: not set).
+  static int sweep_steps_by_env();
   /// Whether the environment variable COHDEM_SERIAL_BLOCKS=1 asks for SimConfig::serial_blocks.
   static bool serial_blocks_by_env();
   /// Whether the force loop's blocks run one after another (SimConfig::serial_blocks or the
@@ -161,10 +183,12 @@ class System {
   bool serial_blocks() const { return cfg.serial_blocks || serial_blocks_by_env(); }
   /// Whether the particle count reaches SimConfig::pair_min per thread (and pairs are on).
   bool pairs_fit_size() const;
-  /// step_pair's counts: pairs evaluated in one sweep, of those undone (a rebuild fell
-  /// between the two steps), and the steps taken again.
+  /// step_sweep's counts: sweeps of several steps evaluated (`pairs`, whatever their
+  /// steps), the steps in them, of those sweeps the ones undone (a rebuild fell between two
+  /// of their steps), and the steps taken again.
   struct PairStats {
     uint64_t pairs = 0, replays = 0, replayed_steps = 0;
+    uint64_t swept_steps = 0;
     /// Of the pairs, those evaluated past SimConfig::pair_margin on the forecast; and the
     /// calls that took plain steps there instead.
     uint64_t forecast = 0, near_plain = 0;
@@ -228,11 +252,12 @@ class System {
  private:
   /// Forces at the current state; kick_h > 0: each free particle's velocities also get the
   /// half-kick F h/m, T h/I once its force is complete (ForceContext::kick_h).
-  /// second (with open_next; step_pair): the next step too, in the same sweep, its
-  /// displacements there.
+  /// second (with open_next; step_sweep): the next step too, in the same sweep, its
+  /// displacements there; third and fourth (one thread): the steps after it.
   /// hold_springs: the contact laws' spring increments get dt = 0 (prepare(): a force
   /// evaluation at an instant whose increment the springs already hold, or at the start).
-  void compute_forces(double kick_h = 0, bool open_next = false, Drift* second = nullptr, bool hold_springs = false);
+  void compute_forces(double kick_h = 0, bool open_next = false, Drift* second = nullptr, bool hold_springs = false,
+                      Drift* third = nullptr, Drift* fourth = nullptr);
   /// step_once in two halves: the walls' motion, the opening half-kick and drift (unless
   /// the force loop did them), the clock, pours and the rebuild decision; then the force
   /// loop with the closing half-kick (and, open_next, the next opening), the thermal model
@@ -240,7 +265,7 @@ class System {
   void begin_step();
   void end_step(bool open_next);
   /// The entries of a contact history that are live or hold a record other than zero bytes
-  /// (all others are zero and not live): what step_pair's snapshot keeps of it.
+  /// (all others are zero and not live): what step_sweep's snapshot keeps of it.
   struct SparseHistory {
     std::vector<uint32_t> k;
     std::vector<uint8_t> live;
@@ -250,18 +275,18 @@ class System {
     void take(const HistoryArray& h, int threads = 1);
     void restore(HistoryArray& h) const;
   };
-  /// step_pair's way back: the moved state and the contact history at a step after the
-  /// lists' last build, from which pairs alone led to the present.
+  /// step_sweep's way back: the moved state and the contact history at a step after the
+  /// lists' last build, from which sweeps alone led to the present (`swept`: their steps).
   struct Snapshot {
     std::vector<Vec3> x, v, omega;
     SparseHistory hist, whist;
     double time = 0;
-    uint64_t step = 0, builds = 0, pairs = 0;
+    uint64_t step = 0, builds = 0, swept = 0;
     bool valid = false;
   };
   void take_snapshot();
   Snapshot snap_;
-  /// step_pair's forecast of NeighborList::rebuild_measure: its last value, the step whose
+  /// step_sweep's forecast of NeighborList::rebuild_measure: its last value, the step whose
   /// positions it measured, the lists' build it belongs to, and its growth per step over the
   /// last two intervals between measurements (negative: not known yet).
   struct Trend {
@@ -273,7 +298,7 @@ class System {
   };
   Trend trend_;
   PairStats pair_stats_;
-  /// step_pair's count of the live contacts (SimConfig::pair_max_contacts): whether they were
+  /// step_sweep's count of the live contacts (SimConfig::pair_max_contacts): whether they were
   /// dense, at which step and after which list build it was counted.
   static constexpr uint64_t kDenseCheckSteps = 64;
   bool dense_ = false;

@@ -1,8 +1,9 @@
 // System::step_pair evaluates two time steps in one sweep of the force loop (the second
-// step's rows a plane of cells behind the first's: ForceContext::drift2). Each particle's
-// arithmetic, and its order, is that of two plain steps, and when the neighbor lists turn out
-// to need a rebuild between the two, the state goes back to a snapshot and the steps since
-// are taken again one at a time. So a run of pairs must end in the same state, bit for bit,
+// step's rows a plane of cells behind the first's: ForceContext::drift2), System::step_sweep
+// up to four on one thread (ForceContext::drift_more). Each particle's arithmetic, and its
+// order, is that of plain steps, and when the neighbor lists turn out to need a rebuild
+// between two of them, the state goes back to a snapshot and the steps since are taken
+// again one at a time. So a run of sweeps must end in the same state, bit for bit,
 // as the same run of plain steps (step_once(true)): checked here on a box of colliding
 // spheres with a small skin, so that rebuilds fall between the two steps of a pair again and
 // again (the way back is taken) and also at pair boundaries, with frozen particles, wall
@@ -47,9 +48,9 @@ std::vector<Law> laws() {
 // a sweep of about ten batches (sim/screen.hpp, kBatch), so that the second step's cursor
 // waits for the first's again and again.
 constexpr size_t kCount = 3000;
-std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = false) {
+std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = false, double skin = 1e-4) {
   auto s =
-      make_system({{"glass", 2500, 5e7, 0.25}}, law.model, law.rolling, law.p, 5e-6, {0, 0, -9.81}, 1e-4);
+      make_system({{"glass", 2500, 5e7, 0.25}}, law.model, law.rolling, law.p, 5e-6, {0, 0, -9.81}, skin);
   // column: a box of the same volume ten times as tall, for several threads: the lists'
   // rows run plane by plane up the box, and a block must hold two planes' rows
   // (PairSlots::chained) for pairs.
@@ -66,7 +67,8 @@ std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = 
     s->particles.flag[i] = kFrozen;
     s->particles.v[i] = s->particles.omega[i] = Vec3{};
   }
-  s->cfg.pair_min = 0;  // pairs for these few particles too
+  s->cfg.pair_min = 0;    // pairs for these few particles too
+  s->cfg.sweep_min = 0;   // and sweeps of up to SimConfig::sweep_steps
   s->cfg.pair_max_contacts = 1e9;  // and however dense their contacts
   if (threads > 1) {
     s->cfg.threads = threads;
@@ -86,18 +88,19 @@ struct End {
   System::PairStats pairs;
 };
 
-// `steps` steps (pairs near a rebuild only below `margin`, SimConfig::pair_margin): plain (step_once(true),
-// the last one closed), or in pairs where it can.
-End run(const Law& law, bool pairs, int steps, double margin, int threads = 1, bool column = false) {
-  auto s = make_box(law, threads, column);
+// `steps` steps (sweeps near a rebuild only below `margin`, SimConfig::pair_margin): plain
+// (step_once(true), the last one closed), or in sweeps of `sweep` steps where it can.
+End run(const Law& law, bool pairs, int steps, double margin, int threads = 1, bool column = false, int sweep = 2,
+        double ahead = 4, double skin = 1e-4) {
+  auto s = make_box(law, threads, column, skin);
   s->cfg.pair_margin = margin;
+  s->cfg.pair_ahead = ahead;
   int k = 0;
   s->step_once(true);
   ++k;
   while (k < steps - 1) {
-    if (pairs && k + 2 < steps) {
-      s->step_pair();
-      k += 2;
+    if (pairs && k + sweep < steps) {
+      k += s->step_sweep(sweep);
     } else {
       s->step_once(true);
       ++k;
@@ -175,6 +178,79 @@ TEST(StepPair, PairsEndInTheStateOfPlainStepsBitForBit) {
                   (unsigned long long)b.pairs.replayed_steps);
     }
   });
+}
+
+// Three and four steps in one sweep on one thread (each step's cursor following the one
+// before it): the same end as plain steps, bit for bit. With the box's skin of 0.1 mm its
+// lists are rebuilt every few steps, too often for the growth of the displacements to be
+// known before the next build, and sweeps stay pairs (step_sweep); with 0.4 mm they last
+// some tens of steps, and sweeps of three and four steps run: with the default forecast
+// (margin 0.75, four times the growth for each step ahead), and with one that lets every
+// sweep start (margin 1, pair_ahead -1), whose sweeps across a rebuild are undone and
+// taken again (the way back).
+TEST(StepPair, SweepsOfThreeAndFourStepsEndInTheStateOfPlainSteps) {
+  omp_set_num_threads(1);
+  constexpr int kSteps = 401;
+  constexpr double kSkin = 4e-4;
+  each_law_and_path([&](const Law& law, const std::string& path) {
+    const End a = run(law, false, kSteps, 1.0, 1, false, 2, 4, kSkin);
+    EXPECT_GT(a.builds, 5u) << path;
+    for (int sweep : {3, 4}) {
+      for (double margin : {0.75, 1.0}) {
+        const End b = run(law, true, kSteps, margin, 1, false, sweep, margin == 1.0 ? -1.0 : 4.0, kSkin);
+        const std::string what = path + ", " + std::to_string(sweep) + " steps a sweep, margin " + std::to_string(margin);
+        expect_same(a, b, what);
+        EXPECT_GT(b.pairs.pairs, 10u) << what;
+        // Sweeps cut short near a rebuild take two steps at least; some take all of theirs.
+        const uint64_t kept = b.pairs.pairs - b.pairs.replays;
+        EXPECT_GE(b.pairs.swept_steps, 2 * kept) << what;
+        EXPECT_LE(b.pairs.swept_steps, uint64_t(sweep) * kept) << what;
+        EXPECT_GT(b.pairs.swept_steps, 2 * kept) << what;
+        if (margin == 1.0) {
+          EXPECT_GT(b.pairs.replays, 0u) << what;
+        }
+        std::printf("[info] %s: %llu sweeps, %llu steps in those kept, %llu undone (%llu steps taken again)\n",
+                    what.c_str(), (unsigned long long)b.pairs.pairs, (unsigned long long)b.pairs.swept_steps,
+                    (unsigned long long)b.pairs.replays, (unsigned long long)b.pairs.replayed_steps);
+      }
+    }
+  });
+}
+
+// How many steps a sweep takes: SimConfig::sweep_steps on one thread from sweep_min
+// particles on (at most; step_sweep returns the count), two below it and where the force
+// loop runs on several threads. The box with a skin of 1.5 mm, whose lists outlast these
+// 19 steps, after three pairs (the displacements' growth is then known) and with pair_ahead
+// 0 (no sweep cut short on the forecast).
+TEST(StepPair, SweepStepsFollowTheConfigurationAndTheThreads) {
+  const Law law = laws()[0];
+  omp_set_num_threads(1);
+  auto s = make_box(law, 1, false, 1.5e-3);
+  s->cfg.pair_ahead = 0;
+  EXPECT_EQ(s->sweep_steps(), 4);
+  s->step_once(true);
+  for (int q = 0; q < 3; ++q) s->step_pair();
+  const uint64_t builds = s->nl.stats.builds;
+  EXPECT_EQ(s->step_sweep(4), 4);
+  EXPECT_EQ(s->step_sweep(3), 3);
+  s->cfg.sweep_steps = 3;
+  EXPECT_EQ(s->sweep_steps(), 3);
+  EXPECT_EQ(s->step_sweep(4), 3);
+  s->cfg.sweep_steps = 2;
+  EXPECT_EQ(s->step_sweep(4), 2);
+  EXPECT_EQ(s->step, 19u);
+  EXPECT_EQ(s->nl.stats.builds, builds);  // no build fell among these sweeps
+  s->cfg.sweep_steps = 4;
+  s->cfg.sweep_min = long(kCount) + 1;  // fewer particles than sweep_min: pairs
+  EXPECT_EQ(s->sweep_steps(), 2);
+  EXPECT_EQ(s->step_sweep(4), 2);
+  EXPECT_THROW(s->step_sweep(5), std::logic_error);
+  EXPECT_THROW(s->step_sweep(1), std::logic_error);
+  auto t = make_box(law, 2, true);  // the force loop on two threads
+  EXPECT_EQ(t->sweep_steps(), 2);
+  t->step_once(true);
+  EXPECT_EQ(t->step_sweep(4), 2);
+  omp_set_num_threads(1);
 }
 
 // On several threads each block is swept in two pieces (its tail first for the first step,
@@ -264,6 +340,17 @@ TEST(StepPair, ForceLoopRefusesASecondStepItCannotRun) {
   c.keep_pair = false;
   c.open_dt = 0;  // no fused opening
   EXPECT_THROW(s->model->compute(c), std::logic_error);
+  // A third step without a second, and a third on several threads.
+  Drift d3;
+  c.open_dt = s->cfg.dt;
+  c.drift2 = nullptr;
+  c.drift_more[0] = &d3;
+  EXPECT_THROW(s->model->compute(c), std::logic_error);
+  c.drift2 = &d2;
+  c.parallel_min = 0;
+  omp_set_num_threads(2);
+  EXPECT_THROW(s->model->compute(c), std::logic_error);
+  omp_set_num_threads(1);
 }
 
 // Near a rebuild, step_pair looks ahead instead of stopping at SimConfig::pair_margin: a
