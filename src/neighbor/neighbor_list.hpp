@@ -156,7 +156,7 @@ class NeighborList {
   bool rebuild_due(const Drift& d, const std::vector<Wall>& walls, double skin) const;
   /// What rebuild_due compares with the skin: the largest of the bound on two particles'
   /// relative displacement (plus their radius growth) and each wall's bound, m; a rebuild is
-  /// due exactly when it exceeds the skin (System::step_pair forecasts it a step ahead).
+  /// due exactly when it exceeds the skin (System::step_sweep forecasts it the sweep's steps ahead).
   double rebuild_measure(const Drift& d, const std::vector<Wall>& walls) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return ref_.x.size() == n; }

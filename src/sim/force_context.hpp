@@ -154,7 +154,7 @@ struct PairSlots {
   uint32_t count = 0;        ///< slots in use
   /// The slots hold nothing valid: a new map (which is also when fit() can move the
   /// buffer), a call that stored its results by list entry (recording), or contacts ended
-  /// behind the force loop's back (System::step_pair's undo restores an older history; a
+  /// behind the force loop's back (System::step_sweep's undo restores an older history; a
   /// caller that hands over a fresh buffer or restores a history sets it too). The force
   /// loop then fills them with kNoPair before its sweep. From then on every pair that is
   /// picked (in contact, or live before the call) writes its slot, its result when in
@@ -625,7 +625,7 @@ struct ForceContext {
   Drift* drift = nullptr;
   /// When not null (needs the fused opening and no recording; on several threads a PairSlots
   /// whose blocks are chained): the loop runs
-  /// the next step too, in the same sweep (System::step_pair), its displacements since the
+  /// the next step too, in the same sweep (System::step_sweep), its displacements since the
   /// build into *drift2. Its forces, kicks and drift are those of the next call to the loop
   /// with the same lists: the caller must take that step only if the lists need no rebuild
   /// after this one (*drift), and undo it otherwise.

@@ -33,8 +33,9 @@
 // its own row's results kept in order apart (PairSlots::own_rows), added after them. Only
 // WHEN and on which thread pass 2 runs, and how the sums are collected, depend on the thread
 // count, never what is summed or in which order. With ForceContext::drift2, the next step runs in the
-// same sweep, a second cursor following the first in each thread's block (System::step_pair;
-// on several threads each block is swept as two pieces, its tail first: two_steps below).
+// same sweep, a second cursor following the first in each thread's block (System::step_sweep;
+// on several threads each block is swept as two pieces, its tail first: two_steps below), and
+// on one thread with ForceContext::drift_more a third and a fourth (steps_one_thread below).
 #pragma once
 #include <algorithm>
 #include <cmath>
