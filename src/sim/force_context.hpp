@@ -630,7 +630,7 @@ struct ForceContext {
   /// with the same lists: the caller must take that step only if the lists need no rebuild
   /// after this one (*drift), and undo it otherwise.
   Drift* drift2 = nullptr;
-  /// With drift2, on one thread only: further steps in the same sweep (System::step_group),
+  /// With drift2, on one thread only: further steps in the same sweep (System::step_sweep),
   /// the third step's displacements into drift_more[0], the fourth's into drift_more[1]
   /// (null: none). Each step's cursor follows the one before as the second follows the first.
   Drift* drift_more[2] = {nullptr, nullptr};

@@ -608,13 +608,11 @@ int System::step_sweep(const int k) {
     const double g = trend_.growth();
     // Whether a sweep of q steps is forecast to stay clear of the rebuild.
     auto clear = [&](const int q) { return g >= 0 && m + cfg.pair_ahead * double(q - 1) * g <= cfg.skin; };
+    while (K > 2 && !clear(K)) --K;
     if (m > cfg.pair_margin * cfg.skin) {
-      while (K > 2 && !clear(K)) --K;
       forecast = clear(K);
       close = forecast && m + kClose * g > cfg.skin;
       near = !forecast;
-    } else {
-      while (K > 2 && !clear(K)) --K;
     }
   } else {
     K = 2;  // a build in begin_step: the growth since it is not known yet

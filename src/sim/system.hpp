@@ -161,7 +161,8 @@ class System {
   /// list build and every 256 steps taken in sweeps) and the steps since are taken again one
   /// at a time. Near a rebuild (SimConfig::pair_margin) it takes plain steps unless the
   /// displacements' recent growth shows the sweep's last step stays clear of it.
-  /// Returns the steps taken: k, or sweep_steps() where that is fewer.
+  /// Returns the steps taken: k, or fewer where sweep_steps() is, or where the forecast cuts
+  /// the sweep short near a rebuild (two at least).
   int step_sweep(int k);
   /// step_sweep(2): two steps.
   void step_pair() { step_sweep(2); }
