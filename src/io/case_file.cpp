@@ -258,7 +258,8 @@ Case parse(toml::table& root, const std::string& file) {
     const auto sweep = s.integer("sweep_steps", 4, 2);
     if (sweep > 4) s.fail("sweep_steps", "expected 2, 3 or 4 steps in one sweep of the force loop");
     c.cfg.sweep_steps = int(sweep);
-    c.cfg.sweep_min = long(s.integer("sweep_min", 500000, 1));
+    c.cfg.sweep_min = long(s.integer("sweep_min", 65536, 1));
+    c.cfg.sweep_tune = s.boolean("sweep_tune", true);
     c.seed = uint64_t(s.integer("seed", 1));
     c.audit_velocity = s.num("audit_velocity", 0.0, 0, kInf, false, "m/s");
     s.finish();

@@ -311,6 +311,10 @@ int run_case(Case c, const RunOptions& opt) {
   spdlog::info("{} particles, {} walls, {} steps of {:.3g} s ({:.4g} s), contact model {} (rolling {}), output in {}",
                s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
   {
+    // The run's thread count before the line below asks System what it will do (prepare()
+    // sets it too: until the sixty-ninth round the line was written with the machine's
+    // count, so a one-thread run was told two steps a sweep where it took four).
+    if (c.cfg.threads > 0) omp_set_num_threads(c.cfg.threads);
     const int nt = c.cfg.threads > 0 ? c.cfg.threads : omp_get_max_threads();
     // Several steps per sweep (System::step_sweep): whether the size allows it; the run's
     // walls, pours and outputs decide step by step (summary.json's step_pairs counts them).
@@ -321,6 +325,10 @@ int run_case(Case c, const RunOptions& opt) {
         : c.thermal.enabled          ? "several steps per sweep off (thermal model)"
         : !s.pairs_fit_size()
             ? fmt::format("several steps per sweep off at this size (pair_min = {} particles per thread)", c.cfg.pair_min)
+            : s.sweep_timing(2)
+            ? fmt::format("2 or {} steps per sweep, whichever the run's timings find faster (sweep_tune), where the run "
+                          "allows and the contacts are at most 1 a particle (summary.json: step_pairs)",
+                          std::clamp(c.cfg.sweep_steps, 2, 4))
             : fmt::format("up to {} steps per sweep where the run allows and the contacts are at most 1 a particle "
                           "(summary.json: step_pairs)",
                           s.sweep_steps());
@@ -500,7 +508,11 @@ int run_case(Case c, const RunOptions& opt) {
   // rebuild fell between two of their steps) and the steps taken again after those; of the
   // sweeps, those evaluated near a rebuild on the displacements' forecast, and the calls
   // there that took plain steps; the calls that took plain steps because the contacts were
-  // dense (SimConfig::pair_max_contacts).
+  // dense (SimConfig::pair_max_contacts). `tuning`: the choice between two steps a sweep and
+  // sweep_steps by timing (System::SweepTune): the choices made, the steps chosen last and the
+  // medians it chose on, ns a particle-step of the force loop (null until a choice is made).
+  const System::SweepTune& tune = s.sweep_tune();
+  const double per_ns = s.particles.size() == 0 ? 0.0 : 1e9 / double(s.particles.size());
   j["step_pairs"] = {{"pairs", s.pair_stats().pairs},
                      {"steps", s.pair_stats().swept_steps},
                      {"steps_per_sweep", s.sweep_steps()},
@@ -508,7 +520,12 @@ int run_case(Case c, const RunOptions& opt) {
                      {"steps_taken_again", s.pair_stats().replayed_steps},
                      {"forecast", s.pair_stats().forecast},
                      {"near_plain", s.pair_stats().near_plain},
-                     {"dense_plain", s.pair_stats().dense_plain}};
+                     {"dense_plain", s.pair_stats().dense_plain},
+                     {"tuning", tune.tunings == 0 ? nlohmann::json(nullptr)
+                                                  : nlohmann::json{{"choices", tune.tunings},
+                                                                   {"steps_per_sweep", tune.best > 0 ? tune.best : 0},
+                                                                   {"two_ns", tune.s_two * per_ns},
+                                                                   {"more_ns", tune.s_more * per_ns}}}};
   j["kinetic_energy"] = s.kinetic_energy();
   {  // flow observables of the free particles (benchmarks compare them with peer codes)
     double mfree = 0;

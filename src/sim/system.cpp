@@ -407,7 +407,38 @@ int System::sweep_steps() const {
   if (n > cfg.parallel_min && omp_get_max_threads() > 1) return 2;  // the force loop on several threads
   const int env = sweep_steps_by_env();
   if (env > 0) return env;
-  return n >= cfg.sweep_min ? std::clamp(cfg.sweep_steps, 2, 4) : 2;
+  if (n < cfg.sweep_min) return 2;
+  const int most = std::clamp(cfg.sweep_steps, 2, 4);
+  if (!cfg.sweep_tune || most == 2) return most;
+  if (tune_.best > 0) return tune_.best;
+  return tune_.more_next ? most : 2;
+}
+
+bool System::sweep_timing(const int wanted) const {
+  const int most = std::clamp(cfg.sweep_steps, 2, 4);
+  const long n = long(particles.size());
+  return cfg.sweep_tune && most > 2 && tune_.best == 0 && sweep_steps_by_env() == 0 && n >= cfg.sweep_min &&
+         !(n > cfg.parallel_min && omp_get_max_threads() > 1) && (wanted == 2 || wanted == most);
+}
+
+void System::note_sweep_time(const int K, const double seconds) {
+  const int most = std::clamp(cfg.sweep_steps, 2, 4);
+  if (tune_.best > 0 || most == 2 || (K != 2 && K != most) || !(seconds >= 0)) return;
+  (K == 2 ? tune_.two : tune_.more).push_back(seconds);
+  tune_.more_next = K == 2;  // alternated, so that a slow spell of the machine weighs on both
+  if (tune_.two.size() < SweepTune::kSamples || tune_.more.size() < SweepTune::kSamples) return;
+  auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  tune_.s_two = median(tune_.two);
+  tune_.s_more = median(tune_.more);
+  tune_.best = tune_.s_more < tune_.s_two ? most : 2;
+  tune_.chosen_at = pair_stats_.swept_steps;
+  ++tune_.tunings;
+  tune_.two.clear();
+  tune_.more.clear();
+  tune_.more_next = true;
 }
 
 bool System::serial_blocks_by_env() {
@@ -568,7 +599,10 @@ int System::step_sweep(const int k) {
     return K;
   }
   const uint64_t builds = nl.stats.builds;
-  int K = std::min(k, sweep_steps());  // the steps of this sweep (fewer near a rebuild: below)
+  // The choice of the steps a sweep timed again after SweepTune::kRetuneSteps steps in sweeps.
+  if (tune_.best > 0 && pair_stats_.swept_steps - tune_.chosen_at >= tune_.retune_steps) tune_.best = 0;
+  const int wanted = std::min(k, sweep_steps());
+  int K = wanted;  // the steps of this sweep (fewer near a rebuild: below)
   begin_step();  // the first step's opening is done; the rebuild decision before it
   // Near a rebuild (the displacements since the build past SimConfig::pair_margin of what
   // triggers one): plain steps. A snapshot is taken after every list build and every
@@ -633,7 +667,11 @@ int System::step_sweep(const int k) {
   const double dt = cfg.dt;
   Drift second, third, fourth;
   Drift* const at[4] = {&open_drift_, &second, &third, &fourth};
+  // Timed where the choice of the steps is being made (SweepTune), for a sweep taken whole.
+  const bool timed = K == wanted && sweep_timing(wanted);
+  const double t0 = timed ? omp_get_wtime() : 0.0;
   compute_forces(0.5 * dt, true, &second, false, K >= 3 ? &third : nullptr, K >= 4 ? &fourth : nullptr);
+  const double t_loop = timed ? (omp_get_wtime() - t0) / double(K) : -1.0;
   ++pair_stats_.pairs;
   pair_stats_.forecast += forecast;
   // The positions each of steps 2..K opened with: a step whose lists needed a rebuild undoes
@@ -669,6 +707,7 @@ int System::step_sweep(const int k) {
     return K;
   }
   trend_.note(m, step + uint64_t(K - 1), nl.stats.builds);
+  if (timed) note_sweep_time(K, t_loop);
   snap_.swept += uint64_t(K);
   pair_stats_.swept_steps += uint64_t(K);
   // What plain steps do between and after the force loops, for walls that stay where they

@@ -58,14 +58,18 @@ struct SimConfig {
   /// At most this many steps (2 to 4) in one sweep where the force loop runs on one thread
   /// and the particles number sweep_min or more (System::step_sweep; otherwise two: on
   /// several threads the blocks' hand-offs follow two cursors). Each further step's cursor
-  /// follows the one before a plane of cells behind, on data still in the caches: on the
-  /// development VM the gas on one thread ran 1.10x as fast with four steps a sweep as with
-  /// two at 10^6 and 6 x 10^5 particles, but 0.955x at 3 x 10^5 and 0.98x at 10^5
-  /// (docs/performance-history.md, sixty-ninth round). Case file: `[simulation]
-  /// sweep_steps`, `sweep_min`; the environment variable COHDEM_SWEEP (2 to 4) sets the steps
-  /// at any size (for comparisons). Results are the same bits.
+  /// follows the one before a plane of cells behind, on data still in the caches. Whether
+  /// that pays depends on the machine's caches as much as on the problem: the gas on one
+  /// thread with four steps a sweep against two ran 1.10x at 10^6 particles but 0.955x at
+  /// 3 x 10^5 on a Xeon VM with 2 MiB of L2 a core, and 1.07x at 10^6 and 1.12x at 3 x 10^5
+  /// on a Zen 5 VM with 1 MiB (docs/performance-history.md, sixty-ninth and seventieth
+  /// rounds). So by default (sweep_tune) the run times both and keeps the faster
+  /// (System::SweepTune). Case file: `[simulation] sweep_steps`, `sweep_min`, `sweep_tune`;
+  /// the environment variable COHDEM_SWEEP (2 to 4) sets the steps at any size, untimed (for
+  /// comparisons). Results are the same bits whichever is taken.
   int sweep_steps = 4;
-  long sweep_min = 500000;
+  long sweep_min = 65536;
+  bool sweep_tune = true;
   /// Two steps in one sweep only while the live contacts are at most this many a particle
   /// (counted every System::kDenseCheckSteps steps and after each list build): a pair saves
   /// the second step's reads from memory, which is what a dilute problem's step waits for (the
@@ -166,9 +170,10 @@ class System {
   int step_sweep(int k);
   /// step_sweep(2): two steps.
   void step_pair() { step_sweep(2); }
-  /// How many steps step_sweep takes in one sweep now, at most: SimConfig::sweep_steps where
-  /// the force loop runs on one thread and the particles number SimConfig::sweep_min or more
-  /// (COHDEM_SWEEP, where set, at any size on one thread), else 2.
+  /// How many steps step_sweep takes in one sweep now, at most: where the force loop runs on
+  /// one thread and the particles number SimConfig::sweep_min or more, SimConfig::sweep_steps,
+  /// or with sweep_tune the one chosen by timing (SweepTune; while timing, the choice timed
+  /// next); COHDEM_SWEEP, where set, at any size on one thread; else 2.
   int sweep_steps() const;
   /// Whether step_sweep can evaluate several steps in one sweep now (SimConfig::pair_min).
   bool pairs_allowed() const;
@@ -197,6 +202,32 @@ class System {
     uint64_t dense_plain = 0;
   };
   const PairStats& pair_stats() const { return pair_stats_; }
+  /// How step_sweep chooses between two steps a sweep and SimConfig::sweep_steps where
+  /// SimConfig::sweep_tune: it alternates the two, times the force loop of each sweep taken
+  /// whole (per step: the steps' other work is the same either way), and after kSamples
+  /// of each keeps the one whose median is lower; it times them again after kRetuneSteps
+  /// steps taken in sweeps, as the contacts change. Results are the same bits whichever is
+  /// taken, so the choice, which follows the machine's timings, changes no result.
+  struct SweepTune {
+    static constexpr size_t kSamples = 12;
+    static constexpr uint64_t kRetuneSteps = 8192;
+    uint64_t retune_steps = kRetuneSteps;  ///< (tests shorten it)
+    int best = 0;         ///< the steps chosen (0: timing them)
+    bool more_next = true;  ///< while timing: the next sweep takes sweep_steps (else two)
+    uint64_t chosen_at = 0;  ///< PairStats::swept_steps at the choice
+    uint64_t tunings = 0;    ///< choices made
+    std::vector<double> two, more;  ///< seconds a step of the sweeps timed, per choice
+    double s_two = 0, s_more = 0;   ///< the last choice's medians, seconds a step
+  };
+  const SweepTune& sweep_tune() const { return tune_; }
+  /// A sweep of K steps taken whole while timing (SweepTune), its force loop `seconds` a
+  /// step: counted where K is one of the two choices, and the choice made once both have
+  /// SweepTune::kSamples. Called by step_sweep (public for tests).
+  void note_sweep_time(int K, double seconds);
+  /// Whether step_sweep is timing the choices (SweepTune) for a sweep of `wanted` steps.
+  bool sweep_timing(int wanted) const;
+  /// The timing's record, writable (tests only).
+  SweepTune& tune_for_tests() { return tune_; }
   void run(uint64_t nsteps, const std::function<void(const System&)>& after_step = {});
 
   // Observables.
@@ -299,6 +330,7 @@ class System {
   };
   Trend trend_;
   PairStats pair_stats_;
+  SweepTune tune_;
   /// step_sweep's count of the live contacts (SimConfig::pair_max_contacts): whether they were
   /// dense, at which step and after which list build it was counted.
   static constexpr uint64_t kDenseCheckSteps = 64;

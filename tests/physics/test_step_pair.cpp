@@ -69,6 +69,7 @@ std::unique_ptr<System> make_box(const Law& law, int threads = 1, bool column = 
   }
   s->cfg.pair_min = 0;    // pairs for these few particles too
   s->cfg.sweep_min = 0;   // and sweeps of up to SimConfig::sweep_steps
+  s->cfg.sweep_tune = false;  // always (the choice by timing: SweepTuneKeepsTheFasterChoice)
   s->cfg.pair_max_contacts = 1e9;  // and however dense their contacts
   if (threads > 1) {
     s->cfg.threads = threads;
@@ -250,6 +251,72 @@ TEST(StepPair, SweepStepsFollowTheConfigurationAndTheThreads) {
   EXPECT_EQ(t->sweep_steps(), 2);
   t->step_once(true);
   EXPECT_EQ(t->step_sweep(4), 2);
+  omp_set_num_threads(1);
+}
+
+// The choice between two steps a sweep and sweep_steps by timing (SimConfig::sweep_tune,
+// System::SweepTune), fed timings whose medians are known: while timing, the two choices
+// alternate; once both have kSamples, the one with the lower median is kept (whichever it
+// is), until kRetuneSteps steps in sweeps later, when they are timed again. A timing of
+// another count of steps (a sweep cut short) is not counted, and nothing is timed on
+// several threads or with the environment's COHDEM_SWEEP. A real run that times them gives
+// the same bits as plain steps (tests/cli/pair_steps.sh, the run `tuned`).
+TEST(StepPair, SweepTuneKeepsTheFasterChoice) {
+  if (System::sweep_steps_by_env() != 0) GTEST_SKIP() << "COHDEM_SWEEP is set: the steps are fixed, untimed";
+  const Law law = laws()[0];
+  omp_set_num_threads(1);
+  auto s = make_box(law, 1, false, 1.5e-3);
+  s->cfg.sweep_tune = true;
+  using T = System::SweepTune;
+  // Medians 1.0 (four steps) against 1.2 (two): four kept; samples spread around them, the
+  // larger choice's with outliers (an interrupted sweep) that a mean would follow.
+  auto feed = [&](const double more, const double two) {
+    for (size_t q = 0; q < T::kSamples; ++q) {
+      EXPECT_EQ(s->sweep_steps(), 4) << "sample " << q;  // alternated: the larger first
+      EXPECT_TRUE(s->sweep_timing(4));
+      s->note_sweep_time(4, q % 4 == 3 ? 50.0 * more : more * (1.0 + 0.01 * double(q % 3)));
+      if (q + 1 < T::kSamples) EXPECT_EQ(s->sweep_steps(), 2);
+      s->note_sweep_time(3, 1e-9);  // a sweep cut short: not counted
+      s->note_sweep_time(2, two * (1.0 - 0.01 * double(q % 2)));
+    }
+  };
+  EXPECT_EQ(s->sweep_tune().best, 0);
+  feed(1.0, 1.2);
+  EXPECT_EQ(s->sweep_tune().best, 4);
+  EXPECT_EQ(s->sweep_tune().tunings, 1u);
+  EXPECT_EQ(s->sweep_steps(), 4);
+  EXPECT_FALSE(s->sweep_timing(4));
+  EXPECT_DOUBLE_EQ(s->sweep_tune().s_more, 1.02);  // the median of 12, outliers and all
+  EXPECT_DOUBLE_EQ(s->sweep_tune().s_two, 1.2);
+  // Timed again only after kRetuneSteps steps in sweeps: the box's sweeps (its lists outlast
+  // them) keep the choice until then.
+  EXPECT_EQ(s->sweep_tune().retune_steps, T::kRetuneSteps);
+  s->step_once(true);
+  for (int q = 0; q < 3; ++q) s->step_pair();
+  EXPECT_EQ(s->sweep_tune().best, 4);
+  EXPECT_EQ(s->step_sweep(4), 4);
+  // Past retune_steps: timed again (the real sweeps' timings join the fed ones), and this
+  // time two steps are faster.
+  s->cfg.pair_ahead = 0;
+  s->tune_for_tests().retune_steps = 1;  // (kRetuneSteps in runs)
+  s->step_sweep(4);
+  EXPECT_EQ(s->sweep_tune().best, 0);
+  const size_t had = s->sweep_tune().two.size() + s->sweep_tune().more.size();
+  EXPECT_LE(had, 1u);  // the sweep just taken, where it was taken whole
+  s->tune_for_tests().two.clear();
+  s->tune_for_tests().more.clear();
+  s->tune_for_tests().more_next = true;
+  feed(1.3, 1.1);
+  EXPECT_EQ(s->sweep_tune().best, 2);
+  EXPECT_EQ(s->sweep_steps(), 2);
+  EXPECT_EQ(s->sweep_tune().tunings, 2u);
+  // Untimed: sweep_tune off (sweep_steps itself), or the force loop on several threads.
+  s->cfg.sweep_tune = false;
+  EXPECT_EQ(s->sweep_steps(), 4);
+  auto t = make_box(law, 2, true);
+  t->cfg.sweep_tune = true;
+  EXPECT_FALSE(t->sweep_timing(2));
+  EXPECT_EQ(t->sweep_steps(), 2);
   omp_set_num_threads(1);
 }
 
