@@ -312,7 +312,7 @@ int run_case(Case c, const RunOptions& opt) {
                s.particles.size(), s.walls.size(), nsteps, c.cfg.dt, c.duration, c.model, c.rolling, out.string());
   {
     // The run's thread count before the line below asks System what it will do (prepare()
-    // sets it too: until the sixty-ninth round the line was written with the machine's
+    // sets it too: before the seventieth round the line was written with the machine's
     // count, so a one-thread run was told two steps a sweep where it took four).
     if (c.cfg.threads > 0) omp_set_num_threads(c.cfg.threads);
     const int nt = c.cfg.threads > 0 ? c.cfg.threads : omp_get_max_threads();
