@@ -402,28 +402,34 @@ int System::sweep_steps_by_env() {
   return k;
 }
 
-int System::sweep_steps() const {
+int System::untimed_sweep_steps() const {
   const long n = long(particles.size());
   if (n > cfg.parallel_min && omp_get_max_threads() > 1) return 2;  // the force loop on several threads
   const int env = sweep_steps_by_env();
   if (env > 0) return env;
-  if (n < cfg.sweep_min) return 2;
-  const int most = std::clamp(cfg.sweep_steps, 2, 4);
-  if (!cfg.sweep_tune || most == 2) return most;
+  return n >= cfg.sweep_min ? std::clamp(cfg.sweep_steps, 2, 4) : 2;
+}
+
+int System::timed_choice() const {
+  const int most = untimed_sweep_steps();
+  return cfg.sweep_tune && most > 2 && sweep_steps_by_env() == 0 ? most : 0;
+}
+
+int System::sweep_steps() const {
+  const int most = timed_choice();
+  if (most == 0) return untimed_sweep_steps();
   if (tune_.best > 0) return tune_.best;
   return tune_.more_next ? most : 2;
 }
 
 bool System::sweep_timing(const int wanted) const {
-  const int most = std::clamp(cfg.sweep_steps, 2, 4);
-  const long n = long(particles.size());
-  return cfg.sweep_tune && most > 2 && tune_.best == 0 && sweep_steps_by_env() == 0 && n >= cfg.sweep_min &&
-         !(n > cfg.parallel_min && omp_get_max_threads() > 1) && (wanted == 2 || wanted == most);
+  const int most = timed_choice();
+  return most > 0 && tune_.best == 0 && (wanted == 2 || wanted == most);
 }
 
 void System::note_sweep_time(const int K, const double seconds) {
-  const int most = std::clamp(cfg.sweep_steps, 2, 4);
-  if (tune_.best > 0 || most == 2 || (K != 2 && K != most) || !(seconds >= 0)) return;
+  const int most = timed_choice();
+  if (tune_.best > 0 || most == 0 || (K != 2 && K != most) || !(seconds >= 0)) return;
   (K == 2 ? tune_.two : tune_.more).push_back(seconds);
   tune_.more_next = K == 2;  // alternated, so that a slow spell of the machine weighs on both
   if (tune_.two.size() < SweepTune::kSamples || tune_.more.size() < SweepTune::kSamples) return;

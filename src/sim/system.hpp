@@ -331,6 +331,12 @@ class System {
   Trend trend_;
   PairStats pair_stats_;
   SweepTune tune_;
+  /// sweep_steps() without the timing: 2 on several threads or below sweep_min, else
+  /// COHDEM_SWEEP or SimConfig::sweep_steps.
+  int untimed_sweep_steps() const;
+  /// The larger of the two choices SweepTune times where it applies (SimConfig::sweep_tune,
+  /// one thread, sweep_min, no COHDEM_SWEEP, sweep_steps above 2), else 0.
+  int timed_choice() const;
   /// step_sweep's count of the live contacts (SimConfig::pair_max_contacts): whether they were
   /// dense, at which step and after which list build it was counted.
   static constexpr uint64_t kDenseCheckSteps = 64;
