@@ -3,8 +3,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 #include "core/error.hpp"
 #include "core/grow.hpp"
@@ -135,21 +137,73 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     const size_t at = 2 * z < nz ? 2 * z : 2 * (nz - 1 - z) + 1;
     return at * plane + c % plane;
   };
+  // On several threads the cell order is cut into parts, one a thread, where the particle
+  // order (the cell order of the last re-sort) cuts it into equal shares, and each thread
+  // counts, places and later copies and searches its own part's cells: the cell starts and
+  // the cell list are then written where the search reads them (binned by one thread, half
+  // the lines the other thread's search read came from the first core: the chute's search
+  // on two threads 1.5x the time of one thread's, the seventy-first round in
+  // docs/performance-history.md). Each thread reads all the particles' cells twice (4 bytes
+  // a particle) and keeps those of its part, in particle order: the same cell list as one
+  // thread's.
+  const int nthreads = long(n) > parallel_min ? omp_get_max_threads() : 1;
   auto bin = [&](const bool by_fold = false) {
     cell_of_.resize(n);
     reserve_headroom(cell_start_, ncell + 1);
-    cell_start_.assign(ncell + 1, 0);
-#pragma omp parallel for schedule(static) if (long(n) > parallel_min)
-    for (size_t i = 0; i < n; ++i) {
-      const size_t c = cell_index(p.x[i]);
-      cell_of_[i] = uint32_t(by_fold ? folded(c) : c);
-    }
-    for (size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
-    for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+    cell_start_.resize(ncell + 1);
     cell_list_.reserve(n + kSearchPad);  // exactly (the AVX2 search's padding below; a resize past
     cell_list_.resize(n);                // the capacity would double it)
-    fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (size_t i = 0; i < n; ++i) cell_list_[fill_[cell_of_[i]]++] = uint32_t(i);
+    fill_.resize(std::max(ncell, n));
+    if (nthreads == 1) {
+      for (size_t i = 0; i < n; ++i) {
+        const size_t c = cell_index(p.x[i]);
+        cell_of_[i] = uint32_t(by_fold ? folded(c) : c);
+      }
+      std::fill(cell_start_.begin(), cell_start_.end(), 0u);
+      for (size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
+      for (size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+      std::copy(cell_start_.begin(), cell_start_.end() - 1, fill_.begin());
+      for (size_t i = 0; i < n; ++i) cell_list_[fill_[cell_of_[i]]++] = uint32_t(i);
+      split_.assign({0u, uint32_t(ncell)});
+      return;
+    }
+#pragma omp parallel num_threads(nthreads)
+    {
+      const size_t nt = size_t(omp_get_num_threads()), t = size_t(omp_get_thread_num());
+      for (size_t i = n * t / nt, i1 = n * (t + 1) / nt; i < i1; ++i) {
+        const size_t c = cell_index(p.x[i]);
+        cell_of_[i] = uint32_t(by_fold ? folded(c) : c);
+      }
+#pragma omp barrier
+#pragma omp single
+      {
+        split_.assign(nt + 1, 0);
+        for (size_t u = 1; u < nt; ++u) split_[u] = std::max(split_[u - 1], cell_of_[n * u / nt]);
+        split_[nt] = uint32_t(ncell);
+        part_.assign(nt, 0);
+      }  // implicit barrier
+      const uint32_t c0 = split_[t], c1 = split_[t + 1];
+      const uint32_t* const co = cell_of_.data();
+      uint32_t* const cs = cell_start_.data();
+      if (t == 0) cs[0] = 0;
+      for (uint32_t c = c0; c < c1; ++c) cs[c + 1] = 0;
+      for (size_t i = 0; i < n; ++i)
+        if (co[i] - c0 < c1 - c0) ++cs[co[i] + 1];
+      uint32_t run = 0;
+      for (uint32_t c = c0; c < c1; ++c) cs[c + 1] = run += cs[c + 1];
+      part_[t] = run;
+#pragma omp barrier
+      uint32_t off = 0;  // the particles of the parts before this one
+      for (size_t u = 0; u < t; ++u) off += uint32_t(part_[u]);
+      uint32_t* const fl = fill_.data();
+      for (uint32_t c = c0, at = off; c < c1; ++c) {
+        fl[c] = at;
+        at = cs[c + 1] += off;
+      }
+      uint32_t* const cl = cell_list_.data();
+      for (size_t i = 0; i < n; ++i)
+        if (co[i] - c0 < c1 - c0) cl[fl[co[i]]++] = uint32_t(i);
+    }
   };
   bin(resort && fold);
   if (resort && n > 0) {
@@ -190,13 +244,23 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     }
     cell_list_.resize(m);
     uint32_t* const cl = cell_list_.data();
-#pragma omp parallel for schedule(static) if (long(n) > parallel_min)
-    for (size_t t = 0; t < n; ++t) {
-      const uint32_t b = cl[t];
-      sx[t] = p.x[b].x;
-      sx[m + t] = p.x[b].y;
-      sx[2 * m + t] = p.x[b].z;
-      sx[3 * m + t] = p.radius[b];
+    auto copy = [&](const size_t t0, const size_t t1) {
+      for (size_t t = t0; t < t1; ++t) {
+        const uint32_t b = cl[t];
+        sx[t] = p.x[b].x;
+        sx[m + t] = p.x[b].y;
+        sx[2 * m + t] = p.x[b].z;
+        sx[3 * m + t] = p.radius[b];
+      }
+    };
+    if (nthreads == 1) {
+      copy(0, n);
+    } else {
+      // Each part's by the thread that binned it, and searches it below.
+      const size_t parts = split_.size() - 1;
+#pragma omp parallel num_threads(nthreads)
+      for (size_t r = size_t(omp_get_thread_num()); r < parts; r += size_t(omp_get_num_threads()))
+        copy(cell_start_[split_[r]], cell_start_[split_[r + 1]]);
     }
     for (size_t t = n; t < m; ++t) {
       sx[t] = sx[m + t] = sx[2 * m + t] = sx[3 * m + t] = 0.0;
@@ -223,33 +287,42 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   //    from the copies in cell order above (search_avx2: the same arithmetic, keys, images
   //    and order as the loop below, so the same lists; chute build 1.21x, forty-ninth round
   //    in docs/performance-history.md).
-  //    Parallel: the cells are cut into chunks of about equal particle counts, several per
-  //    thread, taken by the threads as they come free (cells differ in cost: a chute's dense
-  //    flow against its frozen base, a bed's floor against its free surface); the chunks'
-  //    pairs are placed in chunk order, the order of a search on one thread, so the lists do
-  //    not depend on the threads.
+  //    Parallel: each thread's part of the cell order (step 3) is cut into chunks of about
+  //    equal particle counts, which the thread searches from the front; a thread done takes
+  //    the chunks left in the other parts from their backs (below). The chunks' pairs are
+  //    placed in chunk order, the order of a search on one thread, so the lists do not
+  //    depend on the threads.
   const uint64_t* const id = p.id.data();
   const uint8_t* const flag = p.flag.data();
   const Vec3* const x = p.x.data();
   const double* const rad = p.radius.data();
-  const int nthreads = long(n) > parallel_min ? omp_get_max_threads() : 1;
-  const int chunks = nthreads == 1 ? 1 : int(std::min<size_t>(size_t(8 * nthreads), std::max<size_t>(n / 256, 1)));
+  // The chunks: each part of the cell order (one on one thread) cut into up to 8 of about
+  // equal particle counts (at least 256 particles each).
+  chunk_cell_.clear();
+  run_first_.clear();
+  for (size_t r = 0; r + 1 < split_.size(); ++r) {
+    run_first_.push_back(uint32_t(chunk_cell_.size()));
+    const size_t q0 = cell_start_[split_[r]], q1 = cell_start_[split_[r + 1]];
+    const size_t k = nthreads == 1 ? 1 : std::clamp<size_t>((q1 - q0) / 256, 1, 8);
+    for (size_t u = 0; u < k; ++u) {
+      const size_t q = q0 + (q1 - q0) * u / k;
+      chunk_cell_.push_back(u == 0 ? split_[r] : std::max(chunk_cell_.back(), cell_of_[cell_list_[q]]));
+    }
+  }
+  run_first_.push_back(uint32_t(chunk_cell_.size()));
+  chunk_cell_.push_back(uint32_t(ncell));
+  const int chunks = int(chunk_cell_.size()) - 1;
   if (int(tl_key_.size()) < chunks) { tl_key_.resize(size_t(chunks)); tl_img_.resize(size_t(chunks)); }
   tl_cnt_.resize(size_t(chunks));
   tl_rng_.resize(size_t(chunks));
   size_t np = 0;
   {
-    // A chunk takes the cells whose particles start in its share of the positions; the
-    // cells' ranges of candidates are worked out once for their particles.
+    // A chunk takes its cells; the cells' ranges of candidates are worked out once for
+    // their particles.
     const uint32_t* const cl = cell_list_.data();
     const uint32_t* const cs = cell_start_.data();
-    auto first_cell = [&](const int ch) -> size_t {
-      const size_t q = n * size_t(ch) / size_t(chunks);
-      return q < n ? cell_of_[cl[q]] : ncell;
-    };
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1)
-    for (int ch = 0; ch < chunks; ++ch) {
-      const size_t c0 = ch == 0 ? 0 : first_cell(ch), c1 = ch + 1 == chunks ? ncell : first_cell(ch + 1);
+    auto search_chunk = [&](const int ch) {
+      const size_t c0 = chunk_cell_[size_t(ch)], c1 = chunk_cell_[size_t(ch) + 1];
       // Filled through vector objects of the thread's own (swapped in and out, keeping their
       // capacity): the tl_ vectors' headers share cache lines, and every growth through them
       // would bounce those lines between the cores (once, two threads took three times one
@@ -380,6 +453,49 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
       tl_rng_[size_t(ch)] = {ilo, ihi, jlo, jhi};
       key.swap(tl_key_[ch]);
       image.swap(tl_img_[ch]);
+    };
+    if (nthreads == 1) {
+      for (int ch = 0; ch < chunks; ++ch) search_chunk(ch);
+    } else {
+      // Thread t searches its own part's chunks from the front: it binned and copied that
+      // part's cells (step 3), and their pairs are mostly rows of its own (the rows' ranges
+      // below). Done, it takes the chunks left in the other parts from their backs (cells
+      // differ in cost: a chute's frozen base against its flow, a bed's floor against its
+      // free surface). Each part's front and back are one word, claimed by compare-and-swap,
+      // on a line of its own. Chunks handed to the threads as they came free, any chunk to
+      // either thread, made about half the chunks' copies and pairs the other core's lines
+      // (seventy-first round in docs/performance-history.md).
+      struct alignas(64) Run {
+        std::atomic<uint64_t> fb{0};  ///< front (low 32 bits) and back (high 32): chunks [front, back) left
+      };
+      const int nruns = int(run_first_.size()) - 1;
+      const std::unique_ptr<Run[]> runs(new Run[size_t(nruns)]);
+      for (int r = 0; r < nruns; ++r)
+        runs[size_t(r)].fb.store(uint64_t(run_first_[size_t(r) + 1]) << 32 | run_first_[size_t(r)], std::memory_order_relaxed);
+      // One chunk from the front (or the back) of run r; false when none is left.
+      auto claim = [](Run& r, const bool front, int& ch) {
+        uint64_t v = r.fb.load(std::memory_order_relaxed);
+        for (;;) {
+          const uint32_t f = uint32_t(v), b = uint32_t(v >> 32);
+          if (f >= b) return false;
+          const uint64_t w = front ? (uint64_t(b) << 32 | (f + 1)) : (uint64_t(b - 1) << 32 | f);
+          if (r.fb.compare_exchange_weak(v, w, std::memory_order_relaxed)) {
+            ch = int(front ? f : b - 1);
+            return true;
+          }
+        }
+      };
+#pragma omp parallel num_threads(nthreads)
+      {
+        const int t = omp_get_thread_num();
+        int ch;
+        if (t < nruns)
+          while (claim(runs[size_t(t)], true, ch)) search_chunk(ch);
+        // Every other run, the runs of threads the region did not start included.
+        for (int k = 1; k <= nruns; ++k)
+          if ((t + k) % nruns != t)
+            while (claim(runs[size_t((t + k) % nruns)], false, ch)) search_chunk(ch);
+      }
     }
     std::vector<double>().swap(soa);  // before the rows and the history take their memory
     // Rows: counted, then filled in the order the pairs were found (chunk after chunk). The

@@ -207,6 +207,10 @@ class NeighborList {
   Reference ref_;
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
+  // Several threads: the cell order cut into one part a thread (its first cells, and ncell),
+  // binned, copied for the search and searched by that thread; the search's chunks (their
+  // first cells, and ncell) and each part's first chunk (and the chunk count).
+  std::vector<uint32_t> split_, chunk_cell_, run_first_;
   std::vector<Wall> wide_;
   std::vector<std::vector<uint64_t>> tl_key_;  // per-chunk pairs found, (lower << 32) | higher
   std::vector<std::vector<uint8_t>> tl_img_;   // their images, seen from the lower

@@ -2,6 +2,7 @@
 // exactly once (with the right periodic image), for a polydisperse packing with size ratio 3,
 // with and without periodic directions, and after re-sorting.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <array>
 #include <cmath>
@@ -205,6 +206,51 @@ TEST(NeighborList, Avx2SearchGivesThePortableListsBitForBit) {
     ++cases;
   }
   set_screen_avx2(was);
+  EXPECT_EQ(cases, 7u);
+}
+
+// The lists do not depend on the threads that build them: on several threads the cell order
+// is cut into one part a thread where the particle order cuts it into equal shares, and each
+// thread bins, copies and searches its part (NeighborList::build, steps 3 and 4). Built on
+// one thread and on two, three and five (parallel_min = 0), compared whole: rows, partners,
+// images, transposed rows, the lowest rows and, after a re-sort, the particle order. The
+// cases: particles in random order (a bad estimate of the parts: cells of the parts
+// uneven, some parts without particles at five threads), the narrow periodic boxes (every
+// image), a box periodic in z (the folded re-sort), and a bed moved off its cell order.
+TEST(NeighborList, ListsAreTheSameOnAnyThreadCount) {
+  auto lists = [](ParticleStore p, const Domain& d, const double skin, const bool resort, const int threads) {
+    omp_set_num_threads(threads);
+    NeighborList nl;
+    nl.parallel_min = 0;
+    nl.hist.stride = nl.whist.stride = 8;
+    nl.build(p, {}, d, skin, 0.0, resort);
+    omp_set_num_threads(1);
+    return std::make_tuple(nl.start, nl.jdx, nl.image, nl.rstart, nl.rpair, nl.dep_lo, p.id);
+  };
+  size_t cases = 0;
+  auto compare = [&](const ParticleStore& p, const Domain& d, const double skin, const bool resort, const char* what) {
+    const auto one = lists(p, d, skin, resort, 1);
+    EXPECT_GT(std::get<1>(one).size(), p.size() / 2) << what;
+    for (const int t : {2, 3, 5}) EXPECT_TRUE(lists(p, d, skin, resort, t) == one) << what << ", resort " << resort << ", " << t << " threads";
+    ++cases;
+  };
+  const double L = 0.02, skin = 2e-4;
+  for (const bool resort : {false, true}) {
+    compare(random_particles(3000, L, 2.5e-4, 7.5e-4, 8), cube(L, {false, false, false}), skin, resort, "random order");
+    compare(random_particles(3000, L, 2.5e-4, 7.5e-4, 9), cube(L, {true, true, true}), skin, resort, "periodic in z");
+    const NarrowBox box = narrow_box(1.2, 81, 1500, 9000, 5);
+    compare(box.p, box.d, box.skin, resort, "narrow box");
+  }
+  {
+    ParticleStore p = random_particles(3000, L, 2.5e-4, 7.5e-4, 10);
+    const Domain d = cube(L, {true, false, false});
+    NeighborList sorter;
+    sorter.hist.stride = sorter.whist.stride = 8;
+    sorter.build(p, {}, d, skin, 0.0, true);  // cell order = index order
+    Rng rng(11);
+    for (Vec3& x : p.x) x = x + Vec3{rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4)};
+    compare(p, d, skin, false, "moved bed");
+  }
   EXPECT_EQ(cases, 7u);
 }
 
