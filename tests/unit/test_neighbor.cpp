@@ -154,6 +154,24 @@ void check_images(const double ncut, const bool resort) {
   EXPECT_GT(want.size(), n / 2) << "too few pairs to test";
 }
 
+// 3000 polydisperse spheres in a 20 mm box periodic in x, re-sorted into cell order by a
+// build, then each moved by up to 0.8 mm along each axis: a bed that has left the cell order
+// of its last re-sort, as between re-sorts.
+struct MovedBed {
+  ParticleStore p;
+  Domain d;
+};
+MovedBed moved_bed(const uint64_t seed, const uint64_t move_seed, const double skin) {
+  const double L = 0.02;
+  MovedBed b{random_particles(3000, L, 2.5e-4, 7.5e-4, seed), cube(L, {true, false, false})};
+  NeighborList sorter;
+  sorter.hist.stride = sorter.whist.stride = 8;
+  sorter.build(b.p, {}, b.d, skin, 0.0, true);  // cell order = index order
+  Rng rng(move_seed);
+  for (Vec3& x : b.p.x) x = x + Vec3{rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4)};
+  return b;
+}
+
 }  // namespace
 
 TEST(NeighborList, MatchesBruteForceSizeRatio3) { check(false, false); }
@@ -192,14 +210,10 @@ TEST(NeighborList, Avx2SearchGivesThePortableListsBitForBit) {
     }
   }
   {
-    const double L = 0.02, skin = 2e-4;
-    ParticleStore p = random_particles(3000, L, 2.5e-4, 7.5e-4, 5);
-    const Domain d = cube(L, {true, false, false});
-    NeighborList sorter;
-    sorter.hist.stride = sorter.whist.stride = 8;
-    sorter.build(p, {}, d, skin, 0.0, true);  // cell order = index order
-    Rng rng(6);
-    for (Vec3& x : p.x) x = x + Vec3{rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4)};
+    const double skin = 2e-4;
+    const MovedBed bed = moved_bed(5, 6, skin);
+    const ParticleStore& p = bed.p;
+    const Domain& d = bed.d;
     const auto a = lists(p, d, skin, false, false), b = lists(p, d, skin, false, true);
     EXPECT_TRUE(a == b) << "moved bed";
     EXPECT_GT(std::get<1>(a).size(), p.size());
@@ -241,16 +255,8 @@ TEST(NeighborList, ListsAreTheSameOnAnyThreadCount) {
     const NarrowBox box = narrow_box(1.2, 81, 1500, 9000, 5);
     compare(box.p, box.d, box.skin, resort, "narrow box");
   }
-  {
-    ParticleStore p = random_particles(3000, L, 2.5e-4, 7.5e-4, 10);
-    const Domain d = cube(L, {true, false, false});
-    NeighborList sorter;
-    sorter.hist.stride = sorter.whist.stride = 8;
-    sorter.build(p, {}, d, skin, 0.0, true);  // cell order = index order
-    Rng rng(11);
-    for (Vec3& x : p.x) x = x + Vec3{rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4), rng.uniform(-8e-4, 8e-4)};
-    compare(p, d, skin, false, "moved bed");
-  }
+  const MovedBed bed = moved_bed(10, 11, skin);
+  compare(bed.p, bed.d, skin, false, "moved bed");
   EXPECT_EQ(cases, 7u);
 }
 
