@@ -608,18 +608,55 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     const double m = rmax + skin + reach;
     for (Wall& w : wide_) { w.rmin = std::max(0.0, w.rmin - m); w.rmax += m; w.zmin -= m; w.zmax += m; }
   }
+  //    Several threads: each tests an equal range of the particles into a buffer of its
+  //    own, then places it after the ranges before it (the 10^6 gas's floor, tested on one
+  //    thread, took 4.1-4.2 ms of a 57 ms two-thread build, 3.1-3.2 ms on two: a plane's test
+  //    is bound by the memory it reads; seventy-first round).
   wstart.resize(n + 1);
   wstart[0] = 0;
   wall.clear();
-  if (wide_.empty()) std::fill(wstart.begin(), wstart.end(), 0u);
-  for (size_t i = 0; i < n && !wide_.empty(); ++i) {
-    if (flag[i] == kFree)
-      for (size_t w = 0; w < wide_.size(); ++w) {
-        Vec3 nn;
-        double delta;
-        if (wide_[w].contact(x[i], rad[i], nn, delta) && delta > -(skin + reach)) wall.push_back(uint16_t(w));
+  // The walls within reach of particle i, in wall order, each handed to put.
+  auto walls_of = [&](const size_t i, auto&& put) {
+    if (flag[i] != kFree) return;
+    for (size_t w = 0; w < wide_.size(); ++w) {
+      Vec3 nn;
+      double delta;
+      if (wide_[w].contact(x[i], rad[i], nn, delta) && delta > -(skin + reach)) put(uint16_t(w));
+    }
+  };
+  if (wide_.empty()) {
+    std::fill(wstart.begin(), wstart.end(), 0u);
+  } else if (nthreads == 1) {
+    for (size_t i = 0; i < n; ++i) {
+      walls_of(i, [&](const uint16_t w) { wall.push_back(w); });
+      wstart[i + 1] = uint32_t(wall.size());
+    }
+  } else {
+    if (wl_buf_.size() < size_t(nthreads)) wl_buf_.resize(size_t(nthreads));
+    part_.assign(size_t(nthreads) + 1, 0);
+#pragma omp parallel num_threads(nthreads)
+    {
+      const size_t nt = size_t(omp_get_num_threads()), t = size_t(omp_get_thread_num());
+      const size_t lo = n * t / nt, hi = n * (t + 1) / nt;
+      std::vector<uint16_t> buf;  // the thread's own header (see the pair search's buffers)
+      buf.swap(wl_buf_[t]);
+      buf.clear();
+      for (size_t i = lo; i < hi; ++i) {
+        walls_of(i, [&](const uint16_t w) { buf.push_back(w); });
+        wstart[i + 1] = uint32_t(buf.size());  // within the range, for now
       }
-    wstart[i + 1] = uint32_t(wall.size());
+      part_[t + 1] = buf.size();
+#pragma omp barrier
+#pragma omp single
+      {
+        for (size_t u = 1; u <= nt; ++u) part_[u] += part_[u - 1];
+        wall.resize(part_[nt]);
+      }  // implicit barrier
+      const uint32_t off = uint32_t(part_[t]);
+      for (size_t i = lo; i < hi; ++i) wstart[i + 1] += off;
+      std::copy(buf.begin(), buf.end(), wall.begin() + std::ptrdiff_t(off));
+      buf.swap(wl_buf_[t]);
+    }
   }
 
   // 6. Carry history over, from each live contact of the old lists to its entry in the new

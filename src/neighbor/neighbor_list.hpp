@@ -217,6 +217,7 @@ class NeighborList {
   std::vector<size_t> tl_cnt_;                 // their counts (the buffers keep their length)
   std::vector<std::array<uint32_t, 4>> tl_rng_;  // their lowest and highest rows and partners
   std::vector<uint64_t> part_;                 // per thread range: its rows' and transposed rows' entries
+  std::vector<std::vector<uint16_t>> wl_buf_;  // per thread: its range's wall entries (build step 5)
   // The previous lists during a build (pairs: their live contacts, copied; walls: swapped)
   // and the ids of their rows.
   std::vector<uint64_t> ids_, old_ids_;

@@ -230,21 +230,34 @@ TEST(NeighborList, Avx2SearchGivesThePortableListsBitForBit) {
 // images, transposed rows, the lowest rows and, after a re-sort, the particle order. The
 // cases: particles in random order (a bad estimate of the parts: cells of the parts
 // uneven, some parts without particles at five threads), the narrow periodic boxes (every
-// image), a box periodic in z (the folded re-sort), and a bed moved off its cell order.
+// image), a box periodic in z (the folded re-sort), and a bed moved off its cell order;
+// with a plane and a cylinder wall, whose entries (built by ranges of the particles on
+// several threads) are compared too.
 TEST(NeighborList, ListsAreTheSameOnAnyThreadCount) {
-  auto lists = [](ParticleStore p, const Domain& d, const double skin, const bool resort, const int threads) {
+  // Walls too: a floor 1 mm into the box and a cylinder about the box's axis (radius 8 mm),
+  // each within reach of some particles and not of others.
+  Wall floor, drum;
+  floor.point = {0, 0, 0.001};
+  floor.normal = {0, 0, 1};
+  drum.shape = WallShape::Cylinder;
+  drum.point = {0.01, 0.01, 0};
+  drum.normal = {0, 0, 1};
+  drum.radius = 0.008;
+  const std::vector<Wall> walls{floor, drum};
+  auto lists = [&](ParticleStore p, const Domain& d, const double skin, const bool resort, const int threads) {
     omp_set_num_threads(threads);
     NeighborList nl;
     nl.parallel_min = 0;
     nl.hist.stride = nl.whist.stride = 8;
-    nl.build(p, {}, d, skin, 0.0, resort);
+    nl.build(p, walls, d, skin, 0.0, resort);
     omp_set_num_threads(1);
-    return std::make_tuple(nl.start, nl.jdx, nl.image, nl.rstart, nl.rpair, nl.dep_lo, p.id);
+    return std::make_tuple(nl.start, nl.jdx, nl.image, nl.rstart, nl.rpair, nl.dep_lo, p.id, nl.wstart, nl.wall);
   };
   size_t cases = 0;
   auto compare = [&](const ParticleStore& p, const Domain& d, const double skin, const bool resort, const char* what) {
     const auto one = lists(p, d, skin, resort, 1);
     EXPECT_GT(std::get<1>(one).size(), p.size() / 2) << what;
+    EXPECT_GT(std::get<8>(one).size(), p.size() / 20) << what << ": too few wall entries to test";
     for (const int t : {2, 3, 5}) EXPECT_TRUE(lists(p, d, skin, resort, t) == one) << what << ", resort " << resort << ", " << t << " threads";
     ++cases;
   };
