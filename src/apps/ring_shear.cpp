@@ -634,6 +634,8 @@ int run_ring_shear(const Case& c, const RunOptions& opt) {
   j["simulated_time"] = s.time;
   j["particle_steps_per_s"] = double(s.step) * double(s.particles.size()) / wall_s;
   j["neighbor_builds"] = s.nl.stats.builds;
+  j["neighbor_checks"] = s.nl.stats.checks;      // local checks where the trigger fired (NeighborList::recheck)
+  j["neighbor_deferred"] = s.nl.stats.deferred;  // of them, those that kept the lists
   write_file_atomic(out / "summary.json", j.dump(2) + "\n");
   {
     CsvWriter w(out / "series.csv", {"time", "shear_displacement", "sigma", "tau", "height", "bulk_density", "phase", "tau_base"});

@@ -248,6 +248,11 @@ Case parse(toml::table& root, const std::string& file) {
     c.cfg.skin = s.num("skin", 0.0, 0, kInf, false, "m");
     c.cfg.threads = int(s.integer("threads", 0));
     c.cfg.sort_every = int(s.integer("sort_every", 20));
+    // The local check before a list build (NeighborList::recheck): blocks of this many
+    // interaction cutoffs; 0 turns it off.
+    c.cfg.local_rebuild = s.num("local_rebuild", 2.0, 0, 1000, false, "cutoffs");
+    if (c.cfg.local_rebuild > 0 && c.cfg.local_rebuild < 1)
+      s.fail("local_rebuild", "expected 0 (off) or a block edge of at least 1 interaction cutoff");
     const auto pmin = s.integer("parallel_min", 4000);
     if (pmin < 0) s.fail("parallel_min", "expected a particle count >= 0");
     c.cfg.parallel_min = long(pmin);

@@ -13,7 +13,9 @@ namespace cohdem {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'O', 'H', 'D', 'E', 'M', 'C', 'K'};
-constexpr uint32_t kVersion = 2;  // 2: neighbor-list reference state and application state
+// 2: neighbor-list reference state and application state; 3: the trigger's drift origin and
+// carried bounds (NeighborList::recheck).
+constexpr uint32_t kVersion = 3;
 
 // The checkpoint is written straight into the file (AtomicWriter's stream) and read straight
 // from it, array by array: no copy of the whole state is held in memory on either side. (A
@@ -128,6 +130,8 @@ void write_checkpoint(const std::filesystem::path& path, const System& s, const 
   s.visit_live_contacts(none, [&](uint64_t, uint64_t, const std::byte* r) { o.bytes(r, st); });
   const NeighborList::Reference& ref = s.nl.reference();
   o.vec(ref.x); o.vec(ref.r); o.vec(ref.wall);
+  o.vec(ref.from); o.pod(ref.carried_pair); o.pod(ref.carried_move);
+  o.pod(s.nl.stats.checks); o.pod(s.nl.stats.deferred);
   o.str(app_state);
   file.commit();
 }
@@ -198,9 +202,19 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
   in.vec(c.pair_keys); in.vec(c.pair_data); in.vec(c.wall_keys); in.vec(c.wall_data);
   s.restore_contacts(std::move(c));
   std::string app_state;
+  uint64_t checks = 0, deferred = 0;  // the local checks' counts (version 3 on)
   if (version >= 2) {  // version 1 was written at a rebuild step: the current state is the reference
     NeighborList::Reference ref;
     in.vec(ref.x); in.vec(ref.r); in.vec(ref.wall);
+    if (version >= 3) {  // before: the drift was always from the build's positions
+      in.vec(ref.from);
+      ref.carried_pair = in.pod<double>();
+      ref.carried_move = in.pod<double>();
+      checks = in.pod<uint64_t>();
+      deferred = in.pod<uint64_t>();
+      if ((!ref.from.empty() && ref.from.size() != n) || !(ref.carried_pair >= 0) || !(ref.carried_move >= 0))
+        throw InputError(path.string(), 0, "", "checkpoint's neighbor-list drift origin does not match its particles");
+    }
     app_state = in.str();
     // ref.r is empty where the radii could not change since the lists were built.
     if (ref.x.size() != n || (!ref.r.empty() && ref.r.size() != n) || ref.wall.size() != s.walls.size())
@@ -210,6 +224,8 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
     s.resume_prepare();
   }
   s.nl.stats.builds = builds;  // the restart's own build does not count (re-sort schedule)
+  s.nl.stats.checks = checks;
+  s.nl.stats.deferred = deferred;
   return app_state;
 }
 

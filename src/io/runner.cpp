@@ -571,6 +571,8 @@ int run_case(Case c, const RunOptions& opt) {
   j["run_bytes_per_particle"] = s.particles.size() ? peak_rss_bytes() / double(s.particles.size()) : 0.0;
   j["contacts"] = s.contact_count();
   j["neighbor_builds"] = s.nl.stats.builds;
+  j["neighbor_checks"] = s.nl.stats.checks;      // local checks where the trigger fired (NeighborList::recheck)
+  j["neighbor_deferred"] = s.nl.stats.deferred;  // of them, those that kept the lists
   j["lost_contacts"] = s.nl.stats.lost_contacts;
   j["frames"] = frame;
   j["timestep_audit"] = {{"rayleigh_time", audit.rayleigh}, {"collision_time", audit.collision},

@@ -94,6 +94,8 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
     if (n == 0) { lo[d] = 0; hi[d] = 1; }
     hi[d] += 1e-9 * (1 + std::fabs(hi[d]));
   }
+  box_lo_ = lo;  // the build's bounds, for the local check's blocks (recheck)
+  box_hi_ = hi;
   std::array<int, 3> nc{};
   std::array<double, 3> cell{};
   double cell_min = std::max(cutoff, 1e-12);
@@ -772,7 +774,14 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   // changed since the wrap.)
   ref_.wall.resize(walls.size());
   for (size_t w = 0; w < walls.size(); ++w) ref_.wall[w] = walls[w].point;
+  ref_.from.clear();  // the drift from the build's positions (the storage kept for the checks)
+  ref_.carried_pair = ref_.carried_move = 0;
+  origin_ = ref_.x.data();
+  dom_ = dom;
+  skin_ = skin;
+  range_ = 2 * rmax + reach;
   ++stats.builds;
+  ++epoch;
 }
 
 void NeighborList::keep_live_pairs(size_t old_n) {
@@ -839,6 +848,14 @@ void NeighborList::rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const 
   // A thermal run's reference radii read into a run without a thermal model: kept until the
   // next build (the radii grew since that build, and the trigger must still count it).
   if (with_r && ref_.r.empty()) ref_.r = ref.r;
+  // The drift origin of a local check since that build, and what it carries.
+  if (!ref.from.empty()) {
+    if (ref.from.size() != p.size()) throw RunError("neighbor list drift origin does not match the particles");
+    ref_.from = ref.from;
+    origin_ = ref_.from.data();
+  }
+  ref_.carried_pair = ref.carried_pair;
+  ref_.carried_move = ref.carried_move;
 }
 
 bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
@@ -861,15 +878,17 @@ double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& wa
   // chute flow, a belt) rebuilds for what its particles move relative to each other, not for
   // how far it travels. Frozen particles do not move: with any, the box holds the origin.
   // Walls keep the absolute bound (a wall does not move with the bed).
-  const double dmax = std::sqrt(d.dmax2);
-  double rel = 0;  // bound on any two particles' relative displacement
+  // After a local check that kept the lists (recheck), the displacements are measured from
+  // its positions, and the check's bounds from the build to them are added.
+  const double dmax = ref_.carried_move + std::sqrt(d.dmax2);
+  double rel = ref_.carried_pair;  // bound on any two particles' relative displacement
   if (d.hi.x >= d.lo.x) {  // some particle moves
     Vec3 lo = d.lo, hi = d.hi;
     if (d.frozen) {
       lo = {std::min(lo.x, 0.0), std::min(lo.y, 0.0), std::min(lo.z, 0.0)};
       hi = {std::max(hi.x, 0.0), std::max(hi.y, 0.0), std::max(hi.z, 0.0)};
     }
-    rel = std::min(2 * dmax, norm(hi - lo));
+    rel += std::min(2 * std::sqrt(d.dmax2), norm(hi - lo));
   }
   // A NaN bound (a particle gone NaN, which the run reports elsewhere) decides nothing, as
   // a comparison with the skin it fails: the others decide.
@@ -879,6 +898,133 @@ double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& wa
     if (b > m || m != m) m = b;
   }
   return m;
+}
+
+bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& walls, double skin) {
+  const size_t n = p.size();
+  if (!(local_cutoffs > 0) || tracks_radii() || !has_reference(n) || n == 0 || skin != skin_) return false;
+  ++stats.checks;
+  // The blocks: the build's box (periodic directions: the domain) cut into nb[d] slabs of
+  // at least local_cutoffs cutoffs each, fewer where they would pass a few per particle.
+  const double cut = range_ + skin;
+  double edge = local_cutoffs * cut;
+  std::array<long, 3> nb{};
+  std::array<double, 3> inv{};
+  const Vec3 ext = box_hi_ - box_lo_;
+  const long cap = std::max<long>(64, long(n / 4));
+  for (;;) {
+    long total = 1;
+    for (int d = 0; d < 3; ++d) {
+      const double k = std::floor(ext[d] / edge);
+      nb[d] = k >= 1 && k < 1e6 ? long(k) : 1;
+      inv[d] = nb[d] > 1 ? double(nb[d]) / ext[d] : 0.0;
+      total *= nb[d];
+    }
+    if (total <= cap) break;
+    edge *= 1.25;
+  }
+  const long nblk = nb[0] * nb[1] * nb[2];
+  constexpr size_t W = 7;  // a block's record: displacement box lo xyz, hi xyz, largest d^2
+  const int nt = long(n) > parallel_min ? std::max(1, omp_get_max_threads()) : 1;
+  if (blk_.size() < size_t(nt)) blk_.resize(size_t(nt));
+  const Vec3* const x = p.x.data();
+  const Vec3* const x0 = ref_.x.data();
+  const Vec3 blo = box_lo_;
+  auto block_of = [&](const Vec3& r) {
+    long k[3];
+    for (int d = 0; d < 3; ++d) {
+      const double t = std::floor((r[d] - blo[d]) * inv[d]);
+      k[d] = t >= 0 ? std::min(nb[d] - 1, long(t)) : 0;  // NaN and below the box: 0
+    }
+    return (k[2] * nb[1] + k[1]) * nb[0] + k[0];
+  };
+  // Each particle's displacement since the build into its block's record (frozen ones add
+  // zero: the origin is in their block's box), per thread, then merged (min and max: exact).
+  int team = 1;
+#pragma omp parallel num_threads(nt) if (nt > 1)
+  {
+    const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+    if (t == 0) team = tn;
+    std::vector<double>& b = blk_[size_t(t)];
+    b.resize(size_t(nblk) * W);
+    for (long q = 0; q < nblk; ++q) {
+      double* const r = b.data() + size_t(q) * W;
+      r[0] = r[1] = r[2] = INFINITY;
+      r[3] = r[4] = r[5] = -INFINITY;
+      r[6] = 0;
+    }
+    const size_t lo = n * size_t(t) / size_t(tn), hi = n * size_t(t + 1) / size_t(tn);
+    for (size_t i = lo; i < hi; ++i) {
+      const Vec3 dx = x[i] - x0[i];
+      double* const r = b.data() + size_t(block_of(x0[i])) * W;
+      r[0] = std::min(r[0], dx.x); r[1] = std::min(r[1], dx.y); r[2] = std::min(r[2], dx.z);
+      r[3] = std::max(r[3], dx.x); r[4] = std::max(r[4], dx.y); r[5] = std::max(r[5], dx.z);
+      r[6] = std::max(r[6], norm2(dx));
+    }
+  }
+  double* const B = blk_[0].data();
+  for (int t = 1; t < team; ++t) {
+    const double* const o = blk_[size_t(t)].data();
+    for (size_t q = 0; q < size_t(nblk) * W; ++q) B[q] = (q % W) < 3 ? std::min(B[q], o[q]) : std::max(B[q], o[q]);
+  }
+  // The global bounds (as rebuild_measure's) and the largest bound over two neighbouring
+  // blocks (a block with itself included), each the smaller of the joint box's diagonal and
+  // the sum of the two largest displacements.
+  Vec3 glo{INFINITY, INFINITY, INFINITY}, ghi{-INFINITY, -INFINITY, -INFINITY};
+  double gd2 = 0;
+  for (long q = 0; q < nblk; ++q) {
+    const double* const r = B + size_t(q) * W;
+    glo = {std::min(glo.x, r[0]), std::min(glo.y, r[1]), std::min(glo.z, r[2])};
+    ghi = {std::max(ghi.x, r[3]), std::max(ghi.y, r[4]), std::max(ghi.z, r[5])};
+    gd2 = std::max(gd2, r[6]);
+  }
+  const double move = std::sqrt(gd2), global = std::min(2 * move, norm(ghi - glo));
+  double local = 0;
+#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(max : local)
+  for (long q = 0; q < nblk; ++q) {
+    const double* const a = B + size_t(q) * W;
+    if (!(a[3] >= a[0])) continue;  // empty
+    const long k0 = q % nb[0], k1 = (q / nb[0]) % nb[1], k2 = q / (nb[0] * nb[1]);
+    const double da = std::sqrt(a[6]);
+    for (int o2 = -1; o2 <= 1; ++o2)
+      for (int o1 = -1; o1 <= 1; ++o1)
+        for (int o0 = -1; o0 <= 1; ++o0) {
+          long c[3] = {k0 + o0, k1 + o1, k2 + o2};
+          bool out = false;
+          for (int d = 0; d < 3; ++d) {
+            if (c[d] >= 0 && c[d] < nb[d]) continue;
+            if (dom_.periodic[d]) c[d] = (c[d] + nb[d]) % nb[d];
+            else out = true;
+          }
+          if (out) continue;
+          const double* const e = B + size_t((c[2] * nb[1] + c[1]) * nb[0] + c[0]) * W;
+          if (!(e[3] >= e[0])) continue;
+          const Vec3 jl{std::min(a[0], e[0]), std::min(a[1], e[1]), std::min(a[2], e[2])};
+          const Vec3 jh{std::max(a[3], e[3]), std::max(a[4], e[4]), std::max(a[5], e[5])};
+          local = std::max(local, std::min(norm(jh - jl), da + std::sqrt(e[6])));
+        }
+  }
+  // Particles in blocks that are not neighbours (two or more slabs apart in some direction
+  // that has three or more) were more than a block's edge apart at the build (less a
+  // rounding allowance): they stay out of range while their relative displacement stays
+  // below `far`. Carried forward: the smaller of the global bound and the bound that keeps
+  // both the neighbours within the skin and the others within `far`.
+  const double span = std::max({std::fabs(box_lo_.x), std::fabs(box_lo_.y), std::fabs(box_lo_.z),
+                                std::fabs(box_hi_.x), std::fabs(box_hi_.y), std::fabs(box_hi_.z)});
+  const double far = edge * (1 - 1e-9) - 1e-12 * span - range_;
+  const double pair = std::min(global, std::max(local, global - (far - skin)));
+  double m = pair;
+  for (size_t w = 0; w < walls.size(); ++w)
+    m = std::max(m, move + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
+  if (!(m <= kRecheckRoom * skin)) return false;
+  // The lists hold: the drift from here on, the check's bounds carried.
+  ref_.from.assign(p.x.begin(), p.x.end());
+  origin_ = ref_.from.data();
+  ref_.carried_pair = pair;
+  ref_.carried_move = move;
+  ++stats.deferred;
+  ++epoch;
+  return true;
 }
 
 size_t NeighborList::live_contacts() const {

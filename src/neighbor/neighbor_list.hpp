@@ -103,6 +103,8 @@ struct NeighborStats {
   uint64_t builds = 0;
   uint64_t lost_contacts = 0;  ///< live contacts whose pair left the list (should stay 0)
   uint64_t flipped = 0;        ///< histories carried over from the other particle's row (re-sorts)
+  uint64_t checks = 0;         ///< local checks run where the global trigger fired (NeighborList::recheck)
+  uint64_t deferred = 0;       ///< of them, those that found the lists still good (no build then)
 };
 
 /// Image code of a partner seen in place: shift[kNoShift] is (+0, +0, +0).
@@ -160,6 +162,34 @@ class NeighborList {
   double rebuild_measure(const Drift& d, const std::vector<Wall>& walls) const;
   /// Whether the lists were built for n particles (otherwise they must be rebuilt).
   bool has_reference(size_t n) const { return ref_.x.size() == n; }
+  /// Where the trigger fires, a finer test (a local check) before a build: the particles
+  /// binned into blocks of at least `local_cutoffs` interaction cutoffs (2 r_max + skin +
+  /// reach) by their positions at the build; for each two neighbouring blocks, the bound on
+  /// the relative displacement of their particles (the diagonal of their displacements'
+  /// joint box, or the sum of their largest displacements); particles in blocks that are not
+  /// neighbours were more than a block's edge apart at the build, and need only the global
+  /// bound to stay below that edge less the contact range. A sheared bed (a chute, a ring
+  /// shear cell) moves its neighbours nearly alike while its top and base part by the whole
+  /// flow: the lists hold far longer than the global bound says. Where the check finds the
+  /// lists good (with kRecheckRoom of the skin to spare), the drift is measured from the
+  /// present positions on (the drift origin) and the check's bounds are carried (added to
+  /// the trigger's), so the per-step cost stays one reduction; the trigger fires again when
+  /// carried plus new displacement reach the skin, and the check runs again from the build's
+  /// positions. Not where radii change between builds (tracks_radii) or local_cutoffs <= 0.
+  /// Returns whether the lists may be kept (no build needed); exact reductions: the same
+  /// decision on any number of threads.
+  bool recheck(const ParticleStore& p, const std::vector<Wall>& walls, double skin);
+  /// Block edge of the local check, in interaction cutoffs (SimConfig::local_rebuild; 0: off).
+  double local_cutoffs = 2;
+  /// A check keeps the lists only where its bounds leave this fraction of the skin at most
+  /// used: at the edge, checks would follow each other every few steps.
+  static constexpr double kRecheckRoom = 0.75;
+  /// Changes at each build and each local check that keeps the lists (the drift origin
+  /// moved): displacements reduced before it are not comparable with those after.
+  uint64_t epoch = 0;
+  /// The positions the displacements of the trigger are measured from: the build's, or the
+  /// last local check's that kept the lists (recheck).
+  const Vec3* drift_origin() const { return origin_; }
   /// Adds particle i's displacement and radius growth since the build to d (a frozen
   /// particle only marks d.frozen). Needs has_reference(p.size()).
   COHDEM_INLINE void add_drift(Drift& d, const ParticleStore& p, size_t i) const {
@@ -172,9 +202,9 @@ class NeighborList {
   /// drift passes its fresh values).
   COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x, double r) const {
     if (ref_.r.empty())
-      d.add(x - ref_.x[i]);  // radii unchanged since the build (tracks_radii)
+      d.add(x - origin_[i]);  // radii unchanged since the build (tracks_radii)
     else
-      d.add(x - ref_.x[i], r - ref_.r[i]);
+      d.add(x - origin_[i], r - ref_.r[i]);  // radius growth since the build
   }
   /// Whether the lists keep the radii they were built with: only when radii can have changed
   /// since (a thermal model's expansion, or a thermal run's checkpoint read into a run
@@ -182,7 +212,7 @@ class NeighborList {
   bool tracks_radii() const { return !ref_.r.empty(); }
   /// The same for a particle whose radius has not changed since the build (the force loop's
   /// fused drift: it runs only where !tracks_radii()), so its radius growth, 0, is not read.
-  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - ref_.x[i]); }
+  COHDEM_INLINE void add_moved(Drift& d, size_t i, const Vec3& x) const { d.add(x - origin_[i]); }
 
   /// The state the lists were last built from (positions, radii where tracks_radii(), wall
   /// points): a checkpoint saves it, and rebuild_at() rebuilds exactly the same lists from
@@ -191,11 +221,16 @@ class NeighborList {
     std::vector<Vec3> x;
     std::vector<double> r;  ///< empty where radii cannot have changed (no thermal model)
     std::vector<Vec3> wall;
+    /// The drift origin where a local check moved it since the build (recheck; empty: x),
+    /// and the bounds it carries: on two particles' relative displacement, and on one
+    /// particle's, from x to `from`, m.
+    std::vector<Vec3> from;
+    double carried_pair = 0, carried_move = 0;
   };
   const Reference& reference() const { return ref_; }
   /// Builds the lists as they were built from `ref` (particles in their current order, no
-  /// re-sort), leaving positions, radii and walls as they are now. Throws RunError when `ref`
-  /// does not match the particle or wall count.
+  /// re-sort), leaving positions, radii and walls as they are now, with ref's drift origin
+  /// and carried bounds. Throws RunError when `ref` does not match the particle or wall count.
   void rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const Domain& dom, double skin, double reach,
                   const Reference& ref);
 
@@ -205,6 +240,15 @@ class NeighborList {
 
  private:
   Reference ref_;
+  const Vec3* origin_ = nullptr;  // ref_.from where a local check set it, else ref_.x
+  // The last build's settings, for the local check: the domain, skin, and the contact range
+  // 2 r_max + reach.
+  Domain dom_;
+  double skin_ = 0, range_ = 0;
+  Vec3 box_lo_, box_hi_;  // the build's bounds (periodic directions: the domain's)
+  // The local check's blocks (the build's positions binned), per thread: each block's
+  // displacement box and largest squared displacement (lo xyz, hi xyz, d^2).
+  std::vector<std::vector<double>> blk_;
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
   // Several threads: the cell order cut into one part a thread (its first cells, and ncell),

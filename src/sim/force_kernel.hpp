@@ -495,7 +495,7 @@ void ContactModelImpl<Law>::compute(ForceContext& c) const {
     // the AVX2 paths run.
     const bool vec_finish = simd && kick_h > 0 && open_dt > 0;
     const FinishFree ff{x, v, omega, rev, mass, inertia, flag, wstart,
-                        vec_finish ? nl.reference().x.data() : nullptr, grav, kick_h, open_dt};
+                        vec_finish ? nl.drift_origin() : nullptr, grav, kick_h, open_dt};
     // The blocks: of about equal work with a PairSlots (its plan), else of equal count.
     auto block = [&](const long t) __attribute__((always_inline)) {
       return share ? c.slots->bound[size_t(t)] : block_begin(n, t, nt);

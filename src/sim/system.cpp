@@ -346,7 +346,10 @@ void System::begin_step() {
     if (P.size() != before) dirty_ = true;
   }
   nl.parallel_min = cfg.parallel_min;
-  if (dirty_ || !tracked || nl.rebuild_due(drift, walls, cfg.skin)) {
+  nl.local_cutoffs = cfg.local_rebuild;
+  // Where the trigger fires, the local check may find the lists good still (sheared flows:
+  // NeighborList::recheck); otherwise a build.
+  if (dirty_ || !tracked || (nl.rebuild_due(drift, walls, cfg.skin) && !nl.recheck(P, walls, cfg.skin))) {
     const bool resort = cfg.sort_every > 0 && nl.stats.builds % uint64_t(cfg.sort_every) == 0;
     nl.build(P, walls, cfg.domain, cfg.skin, reach_, resort);
     dirty_ = false;
@@ -565,7 +568,7 @@ void System::take_snapshot() {
   snap_.whist.take(nl.whist, long(nl.whist.live.size()) > cfg.parallel_min ? nt : 1);
   snap_.time = time;
   snap_.step = step;
-  snap_.builds = nl.stats.builds;
+  snap_.builds = nl.epoch;
   snap_.swept = 0;
   snap_.valid = true;
 }
@@ -604,7 +607,9 @@ int System::step_sweep(const int k) {
     for (int q = 0; q < K; ++q) step_once(true);
     return K;
   }
-  const uint64_t builds = nl.stats.builds;
+  // The lists' epoch: changed by a build, and by a local check that keeps them (the drift's
+  // origin moves).
+  const uint64_t builds = nl.epoch;
   // The choice of the steps a sweep timed again after SweepTune::kRetuneSteps steps in sweeps.
   if (tune_.best > 0 && pair_stats_.swept_steps - tune_.chosen_at >= tune_.retune_steps) tune_.best = 0;
   const int wanted = std::min(k, sweep_steps());
@@ -642,9 +647,9 @@ int System::step_sweep(const int k) {
   constexpr double kClose = 32;
   constexpr uint64_t kCloseSnapSteps = 16;
   bool forecast = false, close = false, near = false;
-  if (nl.stats.builds == builds) {  // no build in begin_step: the drift is since the last one
+  if (nl.epoch == builds) {  // no build (or check) in begin_step: the drift is since the last one
     const double m = nl.rebuild_measure(open_drift_, walls);
-    trend_.note(m, step, nl.stats.builds);
+    trend_.note(m, step, nl.epoch);
     const double g = trend_.growth();
     // Whether a sweep of q steps is forecast to stay clear of the rebuild.
     auto clear = [&](const int q) { return g >= 0 && m + cfg.pair_ahead * double(q - 1) * g <= cfg.skin; };
@@ -655,7 +660,7 @@ int System::step_sweep(const int k) {
       near = !forecast;
     }
   } else {
-    K = 2;  // a build in begin_step: the growth since it is not known yet
+    K = 2;  // a build (or a check) in begin_step: the growth since it is not known yet
   }
   if (near || short_blocks()) {
     pair_stats_.near_plain += near;
@@ -664,7 +669,7 @@ int System::step_sweep(const int k) {
     for (int q = 1; q < K; ++q) step_once(true);
     return K;
   }
-  if (!snap_.valid || snap_.builds != nl.stats.builds || snap_.swept >= kSnapSteps ||
+  if (!snap_.valid || snap_.builds != nl.epoch || snap_.swept >= kSnapSteps ||
       (close && snap_.swept >= kCloseSnapSteps))
     take_snapshot();
   // All K steps in one sweep of the force loop (ForceContext::drift2, drift_more): `at[q]`
@@ -712,7 +717,7 @@ int System::step_sweep(const int k) {
     trend_ = Trend{};
     return K;
   }
-  trend_.note(m, step + uint64_t(K - 1), nl.stats.builds);
+  trend_.note(m, step + uint64_t(K - 1), nl.epoch);
   if (timed) note_sweep_time(K, t_loop);
   snap_.swept += uint64_t(K);
   pair_stats_.swept_steps += uint64_t(K);

@@ -38,6 +38,11 @@ struct SimConfig {
   double skin = 0;          ///< Verlet skin, m (0: 0.2 x the largest radius, set by prepare())
   Domain domain;
   int sort_every = 20;      ///< re-sort particles by cell every N neighbor builds (0: never)
+  /// Where the rebuild trigger fires, a local check first (NeighborList::recheck) over
+  /// blocks of this many interaction cutoffs: a sheared flow keeps its lists while
+  /// neighbours move alike (0: off, the global trigger alone; case file `[simulation]
+  /// local_rebuild`).
+  double local_rebuild = 2;
   int threads = 0;          ///< OpenMP threads (0: OpenMP default)
   /// Below this many particles a step runs on one thread: the OpenMP fork/join cost outweighs
   /// the work (results do not depend on the thread count either way).

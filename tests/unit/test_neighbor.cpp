@@ -532,3 +532,166 @@ TEST(NeighborList, ReferenceRadiiOnlyWhereRadiiCanChange) {
   EXPECT_EQ(r2.start, mech.nl.start);
   EXPECT_EQ(r2.jdx, mech.nl.jdx);
 }
+
+// The local check (NeighborList::recheck): where the global trigger fires, blocks of two
+// cutoffs of the build's positions are compared with their neighbours, and the lists are
+// kept where no two particles of neighbouring blocks, and no two particles at all beyond a
+// block's edge less the contact range, can have closed their gap. The physical requirement
+// (brute force over all pairs): after any sequence of displacements, whenever the lists are
+// kept (no trigger, or a check that keeps them), every touching pair is listed. Adversarial
+// trials: stages of a simple shear in x across z (discontinuous across a periodic z: the
+// blocks must wrap), jitter, a frozen base in some trials, and each stage the closest
+// unlisted pair driven together by 0.8 to 1.3 times its gap.
+TEST(NeighborList, LocalCheckNeverMissesAContact) {
+  Rng rng(77);
+  int kept = 0, caught = 0, builds = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    Bed b(true, 300 + trial);
+    b.d.periodic[2] = trial % 3 == 0;
+    const bool frozen_base = trial % 4 == 1;
+    if (frozen_base)
+      for (size_t i = 0; i < b.p.size(); ++i)
+        if (b.p.x[i].z < 0.002) b.p.flag[i] = kFrozen;
+    const double skin = b.skin;
+    b.nl.build(b.p, {}, b.d, skin, 0.0, false);
+    std::set<std::pair<uint64_t, uint64_t>> listed;
+    auto relist = [&] {
+      listed.clear();
+      for (size_t i = 0; i < b.p.size(); ++i)
+        for (uint32_t k = b.nl.start[i]; k < b.nl.start[i + 1]; ++k)
+          listed.insert(std::minmax(b.p.id[i], b.p.id[b.nl.jdx[k]]));
+    };
+    relist();
+    std::map<uint64_t, size_t> index_of;
+    for (size_t i = 0; i < b.p.size(); ++i) index_of[b.p.id[i]] = i;
+    const Vec3 L = b.d.length();
+    for (int stage = 0; stage < 6; ++stage) {
+      // The shear: top and bottom part by 0.5 to 2 skins this stage.
+      const double g = rng.uniform(0.5, 2.0) * skin / L.z;
+      const double jitter = rng.uniform(0, 0.06) * skin;
+      for (size_t i = 0; i < b.p.size(); ++i) {
+        if (b.p.flag[i] == kFrozen) continue;
+        const Vec3 jit{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+        b.p.x[i] += Vec3{g * (b.p.x[i].z - 0.5 * L.z), 0, 0} + jit * jitter;
+      }
+      // The closest unlisted pair, driven together.
+      double gmin = 1e9;
+      size_t ia = 0, ic = 0;
+      Vec3 dir;
+      for (const auto& [key, dist] : brute(b.p, b.d, 3 * skin)) {
+        if (listed.count(key)) continue;
+        const size_t a = index_of[key.first], c = index_of[key.second];
+        const double gap = dist - b.p.radius[a] - b.p.radius[c];
+        if (gap < gmin) { gmin = gap; ia = a; ic = c; }
+      }
+      if (gmin < 1e9 && gmin > 0) {
+        dir = b.p.x[ic] - b.p.x[ia];
+        for (int k = 0; k < 3; ++k)
+          if (b.d.periodic[k]) dir[k] -= L[k] * std::round(dir[k] / L[k]);
+        dir = normalized(dir);
+        const double s = gmin * rng.uniform(0.8, 1.3);
+        if (b.p.flag[ia] != kFrozen) b.p.x[ia] += dir * (0.5 * s);
+        if (b.p.flag[ic] != kFrozen) b.p.x[ic] -= dir * (0.5 * s);
+      }
+      bool missed = false;  // a touching pair that is not listed (two frozen particles never are)
+      for (const auto& [key, dist] : brute(b.p, b.d, 0.0))
+        missed = missed || (!listed.count(key) &&
+                            (b.p.flag[index_of[key.first]] != kFrozen || b.p.flag[index_of[key.second]] != kFrozen));
+      const bool due = b.nl.needs_rebuild(b.p, {}, skin);
+      const bool keep = !due || b.nl.recheck(b.p, {}, skin);
+      EXPECT_TRUE(keep ? !missed : true) << "trial " << trial << ", stage " << stage
+                                         << ": a touching pair is not listed, and the lists were kept";
+      kept += due && keep;
+      caught += missed && !keep;
+      if (!keep) {
+        b.nl.build(b.p, {}, b.d, skin, 0.0, false);
+        ++builds;
+        relist();
+        index_of.clear();
+        for (size_t i = 0; i < b.p.size(); ++i) index_of[b.p.id[i]] = i;
+      }
+    }
+  }
+  // Both sides exercised (seeded: the counts are fixed for this seed).
+  EXPECT_GE(kept, 6) << "too few stages kept by the local check";
+  EXPECT_GT(caught, 10) << "too few stages that really needed a build";
+  EXPECT_GT(builds, 20);
+}
+
+// A simple shear whose top and bottom part by 1.6 skins: the global trigger fires (the
+// displacements' box is 1.6 skins long), but particles of neighbouring blocks (two blocks of
+// at least two cutoffs, 3.4 mm: five of 4 mm over the bed's 20 mm) moved by at most 0.64
+// skin relative to each other, so the check keeps the lists and carries that bound; the trigger then adds the
+// displacements since the check to it. A wall counts the largest displacement since the
+// build, carried the same way. Off (local_cutoffs 0) and with radii that change, no check.
+TEST(NeighborList, LocalCheckCarriesItsBounds) {
+  Bed b(false, 61);
+  const double skin = b.skin, H = b.d.hi.z;
+  Wall floor;
+  floor.shape = WallShape::Plane;
+  floor.point = {0, 0, -0.01};
+  floor.normal = {0, 0, 1};
+  std::vector<Wall> walls{floor};
+  b.nl.build(b.p, walls, b.d, skin, 0.0, false);
+  const std::vector<Vec3> x0 = b.p.x;
+  double zlo = 1e9, zhi = -1e9;
+  for (const Vec3& x : x0) { zlo = std::min(zlo, x.z); zhi = std::max(zhi, x.z); }
+  const double g = 1.6 * skin / H;
+  for (size_t i = 0; i < b.p.size(); ++i) b.p.x[i] += Vec3{g * x0[i].z, 0, 0};
+  ASSERT_TRUE(b.nl.needs_rebuild(b.p, walls, skin));
+  const uint64_t epoch = b.nl.epoch;
+  b.nl.local_cutoffs = 0;
+  EXPECT_FALSE(b.nl.recheck(b.p, {}, skin));
+  EXPECT_EQ(b.nl.stats.checks, 0u);  // off: none ran
+  b.nl.local_cutoffs = 2;
+  // With the floor: walls count each particle's whole displacement (two skins at the top).
+  EXPECT_FALSE(b.nl.recheck(b.p, walls, skin));
+  EXPECT_EQ(b.nl.epoch, epoch);
+  // Without it, the pairs alone: kept.
+  ASSERT_TRUE(b.nl.recheck(b.p, {}, skin));
+  EXPECT_EQ(b.nl.stats.checks, 2u);
+  EXPECT_EQ(b.nl.stats.deferred, 1u);
+  EXPECT_NE(b.nl.epoch, epoch);
+  const NeighborList::Reference& r = b.nl.reference();
+  // Blocks of at least 2 x (2 x 7.5e-4 + 2e-4) = 3.4 mm: the bed's height in five.
+  const double edge = (zhi - zlo) / std::floor((zhi - zlo) / (2 * (2 * 7.5e-4 + skin)));
+  EXPECT_GT(r.carried_pair, 0.0);
+  EXPECT_LE(r.carried_pair, g * 2 * edge * (1 + 1e-6));
+  EXPECT_LE(r.carried_pair, NeighborList::kRecheckRoom * skin);
+  EXPECT_NEAR(r.carried_move, g * zhi, 1e-12 * H);
+  EXPECT_EQ(r.from, b.p.x);
+  EXPECT_EQ(b.nl.drift_origin(), r.from.data());
+  // Nothing moved since the check: the measure is what the check carried (with the floor,
+  // which has not moved: the largest displacement since the build).
+  Drift none;
+  for (size_t i = 0; i < b.p.size(); ++i) b.nl.add_drift(none, b.p, i);
+  EXPECT_EQ(b.nl.rebuild_measure(none, {}), r.carried_pair);
+  EXPECT_DOUBLE_EQ(b.nl.rebuild_measure(none, walls), r.carried_move);
+  // 0.1 skin more for one particle since the check: added to both bounds.
+  b.p.x[7] += Vec3{0, 0.1 * skin, 0};
+  Drift more;
+  for (size_t i = 0; i < b.p.size(); ++i) b.nl.add_drift(more, b.p, i);
+  // (The 0.1 skin is read back as a difference of coordinates of about 1 cm: 1e-18 m of
+  // round-off, far below the tolerance of 1e-12 skin.)
+  EXPECT_NEAR(b.nl.rebuild_measure(more, {}), r.carried_pair + 0.1 * skin, 1e-12 * skin);
+  EXPECT_NEAR(b.nl.rebuild_measure(more, walls), std::max(r.carried_pair, r.carried_move) + 0.1 * skin, 1e-12 * skin);
+  // A build starts from its own positions again.
+  b.nl.build(b.p, walls, b.d, skin, 0.0, false);
+  EXPECT_TRUE(b.nl.reference().from.empty());
+  EXPECT_EQ(b.nl.reference().carried_pair, 0.0);
+  EXPECT_EQ(b.nl.drift_origin(), b.nl.reference().x.data());
+  // A shear of 3.2 skins: neighbouring blocks part by 1.28 skins: a build is due.
+  const std::vector<Vec3> x1 = b.p.x;
+  for (size_t i = 0; i < b.p.size(); ++i) b.p.x[i] += Vec3{2 * g * x1[i].z, 0, 0};
+  ASSERT_TRUE(b.nl.needs_rebuild(b.p, {}, skin));
+  EXPECT_FALSE(b.nl.recheck(b.p, {}, skin));
+  // Radii that change between builds (thermal fields): no check.
+  ParticleStore q = b.p;
+  q.enable_thermal(293.15);
+  NeighborList t;
+  t.hist.stride = t.whist.stride = 8;
+  t.build(q, walls, b.d, skin, 0.0, false);
+  for (size_t i = 0; i < q.size(); ++i) q.x[i] += Vec3{g * x1[i].z, 0, 0};
+  ASSERT_TRUE(t.needs_rebuild(q, {}, skin));
+  EXPECT_FALSE(t.recheck(q, {}, skin));
+}
