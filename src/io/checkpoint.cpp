@@ -130,7 +130,7 @@ void write_checkpoint(const std::filesystem::path& path, const System& s, const 
   s.visit_live_contacts(none, [&](uint64_t, uint64_t, const std::byte* r) { o.bytes(r, st); });
   const NeighborList::Reference& ref = s.nl.reference();
   o.vec(ref.x); o.vec(ref.r); o.vec(ref.wall);
-  o.vec(ref.from); o.pod(ref.carried_pair); o.pod(ref.carried_move);
+  o.vec(ref.from); o.pod(ref.carried_pair); o.vec(ref.carried_wall);
   o.pod(s.nl.stats.checks); o.pod(s.nl.stats.deferred);
   o.str(app_state);
   file.commit();
@@ -209,10 +209,13 @@ std::string read_checkpoint(const std::filesystem::path& path, System& s) {
     if (version >= 3) {  // before: the drift was always from the build's positions
       in.vec(ref.from);
       ref.carried_pair = in.pod<double>();
-      ref.carried_move = in.pod<double>();
+      in.vec(ref.carried_wall);
       checks = in.pod<uint64_t>();
       deferred = in.pod<uint64_t>();
-      if ((!ref.from.empty() && ref.from.size() != n) || !(ref.carried_pair >= 0) || !(ref.carried_move >= 0))
+      bool nan = false;
+      for (const double c : ref.carried_wall) nan = nan || c != c;
+      if ((!ref.from.empty() && ref.from.size() != n) || !(ref.carried_pair >= 0) || nan ||
+          (!ref.carried_wall.empty() && ref.carried_wall.size() != s.walls.size()))
         throw InputError(path.string(), 0, "", "checkpoint's neighbor-list drift origin does not match its particles");
     }
     app_state = in.str();

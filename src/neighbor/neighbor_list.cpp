@@ -775,11 +775,13 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ref_.wall.resize(walls.size());
   for (size_t w = 0; w < walls.size(); ++w) ref_.wall[w] = walls[w].point;
   ref_.from.clear();  // the drift from the build's positions (the storage kept for the checks)
-  ref_.carried_pair = ref_.carried_move = 0;
+  ref_.carried_pair = 0;
+  ref_.carried_wall.clear();
   origin_ = ref_.x.data();
   dom_ = dom;
   skin_ = skin;
   range_ = 2 * rmax + reach;
+  reach_ = reach;
   ++stats.builds;
   ++epoch;
 }
@@ -855,7 +857,9 @@ void NeighborList::rebuild_at(ParticleStore& p, std::vector<Wall>& walls, const 
     origin_ = ref_.from.data();
   }
   ref_.carried_pair = ref.carried_pair;
-  ref_.carried_move = ref.carried_move;
+  if (!ref.carried_wall.empty() && ref.carried_wall.size() != walls.size())
+    throw RunError("neighbor list carried wall bounds do not match the walls");
+  ref_.carried_wall = ref.carried_wall;
 }
 
 bool NeighborList::needs_rebuild(const ParticleStore& p, const std::vector<Wall>& walls, double skin) const {
@@ -880,7 +884,7 @@ double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& wa
   // Walls keep the absolute bound (a wall does not move with the bed).
   // After a local check that kept the lists (recheck), the displacements are measured from
   // its positions, and the check's bounds from the build to them are added.
-  const double dmax = ref_.carried_move + std::sqrt(d.dmax2);
+  const double dmax = std::sqrt(d.dmax2);
   double rel = ref_.carried_pair;  // bound on any two particles' relative displacement
   if (d.hi.x >= d.lo.x) {  // some particle moves
     Vec3 lo = d.lo, hi = d.hi;
@@ -888,13 +892,14 @@ double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& wa
       lo = {std::min(lo.x, 0.0), std::min(lo.y, 0.0), std::min(lo.z, 0.0)};
       hi = {std::max(hi.x, 0.0), std::max(hi.y, 0.0), std::max(hi.z, 0.0)};
     }
-    rel += std::min(2 * std::sqrt(d.dmax2), norm(hi - lo));
+    rel += std::min(2 * dmax, norm(hi - lo));
   }
   // A NaN bound (a particle gone NaN, which the run reports elsewhere) decides nothing, as
   // a comparison with the skin it fails: the others decide.
   double m = rel + 2 * d.grow;
   for (size_t w = 0; w < walls.size(); ++w) {
-    const double b = dmax + d.grow + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]);
+    const double c = w < ref_.carried_wall.size() ? ref_.carried_wall[w] : 0.0;  // a local check's
+    const double b = c + dmax + d.grow + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]);
     if (b > m || m != m) m = b;
   }
   return m;
@@ -1013,15 +1018,41 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
                                 std::fabs(box_hi_.x), std::fabs(box_hi_.y), std::fabs(box_hi_.z)});
   const double far = edge * (1 - 1e-9) - 1e-12 * span - range_;
   const double pair = std::min(global, std::max(local, global - (far - skin)));
+  // Walls: over the free particles not listed with a wall (others have no wall entries),
+  // the largest displacement less the particle's room, its gap to the wall at the build
+  // (the build's widened wall) beyond the skin and reach; outside a bounded wall's widened
+  // bounds the room is 0 (the global rule: it cannot reach the wall within a skin).
+  const size_t nw = walls.size();
+  if (nw != ref_.wall.size() || nw != wide_.size()) return false;
+  wall_room_.assign(nw, -INFINITY);
+  if (nw > 0) {
+    double* const wr = wall_room_.data();
+    const double* const rad = p.radius.data();
+    const uint8_t* const flag = p.flag.data();
+#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(max : wr[:nw])
+    for (size_t i = 0; i < n; ++i) {
+      if (flag[i] != kFree) continue;
+      const double dm = norm(x[i] - x0[i]);
+      for (size_t w = 0; w < nw; ++w) {
+        bool listed = false;
+        for (uint32_t k = wstart[i]; k < wstart[i + 1]; ++k) listed = listed || wall[k] == w;
+        if (listed) continue;
+        Vec3 nn;
+        double delta;
+        const double room = wide_[w].contact(x0[i], rad[i], nn, delta) ? std::max(0.0, -delta - skin - reach_) : 0.0;
+        wr[w] = std::max(wr[w], dm - room);
+      }
+    }
+  }
   double m = pair;
-  for (size_t w = 0; w < walls.size(); ++w)
-    m = std::max(m, move + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
+  for (size_t w = 0; w < nw; ++w)
+    m = std::max(m, wall_room_[w] + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
   if (!(m <= kRecheckRoom * skin)) return false;
   // The lists hold: the drift from here on, the check's bounds carried.
   ref_.from.assign(p.x.begin(), p.x.end());
   origin_ = ref_.from.data();
   ref_.carried_pair = pair;
-  ref_.carried_move = move;
+  ref_.carried_wall = wall_room_;
   ++stats.deferred;
   ++epoch;
   return true;

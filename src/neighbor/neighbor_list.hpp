@@ -175,7 +175,10 @@ class NeighborList {
   /// present positions on (the drift origin) and the check's bounds are carried (added to
   /// the trigger's), so the per-step cost stays one reduction; the trigger fires again when
   /// carried plus new displacement reach the skin, and the check runs again from the build's
-  /// positions. Not where radii change between builds (tracks_radii) or local_cutoffs <= 0.
+  /// positions. Walls the same way: a particle not listed with a wall at the build was
+  /// further from it than the skin and reach, by a room of its own; only the particles that
+  /// moved more than their room count against the skin (the bed far from a base, a lid).
+  /// Not where radii change between builds (tracks_radii) or local_cutoffs <= 0.
   /// Returns whether the lists may be kept (no build needed); exact reductions: the same
   /// decision on any number of threads.
   bool recheck(const ParticleStore& p, const std::vector<Wall>& walls, double skin);
@@ -222,10 +225,13 @@ class NeighborList {
     std::vector<double> r;  ///< empty where radii cannot have changed (no thermal model)
     std::vector<Vec3> wall;
     /// The drift origin where a local check moved it since the build (recheck; empty: x),
-    /// and the bounds it carries: on two particles' relative displacement, and on one
-    /// particle's, from x to `from`, m.
+    /// and the bounds it carries, m: on two particles' relative displacement from x to
+    /// `from`; and for each wall, the largest displacement from x to `from` of a particle
+    /// not listed with it, less that particle's gap to it at the build beyond the skin and
+    /// reach (negative where every such particle is further than it moved; empty: 0).
     std::vector<Vec3> from;
-    double carried_pair = 0, carried_move = 0;
+    double carried_pair = 0;
+    std::vector<double> carried_wall;
   };
   const Reference& reference() const { return ref_; }
   /// Builds the lists as they were built from `ref` (particles in their current order, no
@@ -244,11 +250,12 @@ class NeighborList {
   // The last build's settings, for the local check: the domain, skin, and the contact range
   // 2 r_max + reach.
   Domain dom_;
-  double skin_ = 0, range_ = 0;
+  double skin_ = 0, range_ = 0, reach_ = 0;
   Vec3 box_lo_, box_hi_;  // the build's bounds (periodic directions: the domain's)
   // The local check's blocks (the build's positions binned), per thread: each block's
   // displacement box and largest squared displacement (lo xyz, hi xyz, d^2).
   std::vector<std::vector<double>> blk_;
+  std::vector<double> wall_room_;  // the local check's per-wall bounds (carried_wall)
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
   // Several threads: the cell order cut into one part a thread (its first cells, and ncell),

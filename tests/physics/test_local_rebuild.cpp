@@ -221,7 +221,7 @@ TEST(LocalRebuild, RestartAfterAKeptCheckIsBitwiseIdentical) {
   // The drift origin and the carried bounds, as they were.
   EXPECT_EQ(b->nl.reference().from, saved.from);
   EXPECT_EQ(b->nl.reference().carried_pair, saved.carried_pair);
-  EXPECT_EQ(b->nl.reference().carried_move, saved.carried_move);
+  EXPECT_EQ(b->nl.reference().carried_wall, saved.carried_wall);
   b->run(600);
   EXPECT_EQ(a->step, b->step);
   EXPECT_EQ(a->nl.stats.builds, b->nl.stats.builds);

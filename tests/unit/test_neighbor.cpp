@@ -541,7 +541,9 @@ TEST(NeighborList, ReferenceRadiiOnlyWhereRadiiCanChange) {
 // kept (no trigger, or a check that keeps them), every touching pair is listed. Adversarial
 // trials: stages of a simple shear in x across z (discontinuous across a periodic z: the
 // blocks must wrap), jitter, a frozen base in some trials, and each stage the closest
-// unlisted pair driven together by 0.8 to 1.3 times its gap.
+// unlisted pair driven together by 0.8 to 1.3 times its gap; where z is not periodic, a
+// rising floor and the closest particle not listed with it driven onto it. (The shear is 0
+// at z = 0, across the periodic boundary it jumps.)
 TEST(NeighborList, LocalCheckNeverMissesAContact) {
   Rng rng(77);
   int kept = 0, caught = 0, builds = 0;
@@ -553,7 +555,18 @@ TEST(NeighborList, LocalCheckNeverMissesAContact) {
       for (size_t i = 0; i < b.p.size(); ++i)
         if (b.p.x[i].z < 0.002) b.p.flag[i] = kFrozen;
     const double skin = b.skin;
-    b.nl.build(b.p, {}, b.d, skin, 0.0, false);
+    // Where z is not periodic, a floor 0.1 mm below the bed's cube, rising by up to 0.2 skin
+    // every other stage, and then the free particle closest to it among those not listed
+    // with it driven down by 0.8 to 1.3 times its gap.
+    std::vector<Wall> walls;
+    if (!b.d.periodic[2]) {
+      Wall f;
+      f.shape = WallShape::Plane;
+      f.point = {0, 0, -1e-4};
+      f.normal = {0, 0, 1};
+      walls.push_back(f);
+    }
+    b.nl.build(b.p, walls, b.d, skin, 0.0, false);
     std::set<std::pair<uint64_t, uint64_t>> listed;
     auto relist = [&] {
       listed.clear();
@@ -572,7 +585,7 @@ TEST(NeighborList, LocalCheckNeverMissesAContact) {
       for (size_t i = 0; i < b.p.size(); ++i) {
         if (b.p.flag[i] == kFrozen) continue;
         const Vec3 jit{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
-        b.p.x[i] += Vec3{g * (b.p.x[i].z - 0.5 * L.z), 0, 0} + jit * jitter;
+        b.p.x[i] += Vec3{g * b.p.x[i].z, 0, 0} + jit * jitter;
       }
       // The closest unlisted pair, driven together.
       double gmin = 1e9;
@@ -593,18 +606,32 @@ TEST(NeighborList, LocalCheckNeverMissesAContact) {
         if (b.p.flag[ia] != kFrozen) b.p.x[ia] += dir * (0.5 * s);
         if (b.p.flag[ic] != kFrozen) b.p.x[ic] -= dir * (0.5 * s);
       }
+      if (!walls.empty() && stage % 2 == 1) {
+        walls[0].point.z += rng.uniform(0, 0.2) * skin;
+        double wmin = 1e9;
+        size_t iw = 0;
+        for (size_t i = 0; i < b.p.size(); ++i) {
+          if (b.p.flag[i] != kFree || b.nl.wstart[i + 1] > b.nl.wstart[i]) continue;
+          const double gap = b.p.x[i].z - walls[0].point.z - b.p.radius[i];
+          if (gap > 0 && gap < wmin) { wmin = gap; iw = i; }
+        }
+        if (wmin < 1e9) b.p.x[iw].z -= wmin * rng.uniform(0.8, 1.3);
+      }
       bool missed = false;  // a touching pair that is not listed (two frozen particles never are)
+      for (size_t i = 0; i < b.p.size() && !walls.empty(); ++i)  // or a free particle touching the floor
+        missed = missed || (b.p.flag[i] == kFree && b.nl.wstart[i + 1] == b.nl.wstart[i] &&
+                            b.p.x[i].z - walls[0].point.z < b.p.radius[i]);
       for (const auto& [key, dist] : brute(b.p, b.d, 0.0))
         missed = missed || (!listed.count(key) &&
                             (b.p.flag[index_of[key.first]] != kFrozen || b.p.flag[index_of[key.second]] != kFrozen));
-      const bool due = b.nl.needs_rebuild(b.p, {}, skin);
-      const bool keep = !due || b.nl.recheck(b.p, {}, skin);
+      const bool due = b.nl.needs_rebuild(b.p, walls, skin);
+      const bool keep = !due || b.nl.recheck(b.p, walls, skin);
       EXPECT_TRUE(keep ? !missed : true) << "trial " << trial << ", stage " << stage
                                          << ": a touching pair is not listed, and the lists were kept";
       kept += due && keep;
       caught += missed && !keep;
       if (!keep) {
-        b.nl.build(b.p, {}, b.d, skin, 0.0, false);
+        b.nl.build(b.p, walls, b.d, skin, 0.0, false);
         ++builds;
         relist();
         index_of.clear();
@@ -612,6 +639,7 @@ TEST(NeighborList, LocalCheckNeverMissesAContact) {
       }
     }
   }
+  std::printf("[info] local check trials: %d stages kept by a check, %d misses caught, %d builds\n", kept, caught, builds);
   // Both sides exercised (seeded: the counts are fixed for this seed).
   EXPECT_GE(kept, 6) << "too few stages kept by the local check";
   EXPECT_GT(caught, 10) << "too few stages that really needed a build";
@@ -621,35 +649,48 @@ TEST(NeighborList, LocalCheckNeverMissesAContact) {
 // A simple shear whose top and bottom part by 1.6 skins: the global trigger fires (the
 // displacements' box is 1.6 skins long), but particles of neighbouring blocks (two blocks of
 // at least two cutoffs, 3.4 mm: five of 4 mm over the bed's 20 mm) moved by at most 0.64
-// skin relative to each other, so the check keeps the lists and carries that bound; the trigger then adds the
-// displacements since the check to it. A wall counts the largest displacement since the
-// build, carried the same way. Off (local_cutoffs 0) and with radii that change, no check.
+// skin relative to each other, so the check keeps the lists and carries that bound; the
+// trigger then adds the displacements since the check to it. A wall counts, of each particle
+// not listed with it, the displacement less its room (its gap at the build beyond the skin):
+// a floor 1 cm below the bed keeps the lists, a side wall 0.1 mm from it does not (the top's
+// particles along it moved 1.6 skins with little room). Off (local_cutoffs 0) and with radii
+// that change, no check.
 TEST(NeighborList, LocalCheckCarriesItsBounds) {
   Bed b(false, 61);
   const double skin = b.skin, H = b.d.hi.z;
-  Wall floor;
-  floor.shape = WallShape::Plane;
-  floor.point = {0, 0, -0.01};
-  floor.normal = {0, 0, 1};
-  std::vector<Wall> walls{floor};
+  auto plane_at = [](const Vec3& point, const Vec3& normal) {
+    Wall w;
+    w.shape = WallShape::Plane;
+    w.point = point;
+    w.normal = normal;
+    return w;
+  };
+  std::vector<Wall> walls{plane_at({0, 0, -0.01}, {0, 0, 1})};
   b.nl.build(b.p, walls, b.d, skin, 0.0, false);
   const std::vector<Vec3> x0 = b.p.x;
   double zlo = 1e9, zhi = -1e9;
   for (const Vec3& x : x0) { zlo = std::min(zlo, x.z); zhi = std::max(zhi, x.z); }
   const double g = 1.6 * skin / H;
   for (size_t i = 0; i < b.p.size(); ++i) b.p.x[i] += Vec3{g * x0[i].z, 0, 0};
+  // The wall bound by brute force: over the particles not listed with the wall (gap at the
+  // build above the skin), the displacement less the gap beyond the skin.
+  auto wall_bound = [&](const Wall& w) {
+    double m = -INFINITY;
+    for (size_t i = 0; i < b.p.size(); ++i) {
+      const double gap = dot(x0[i] - w.point, w.normal) - b.p.radius[i];
+      if (gap > skin) m = std::max(m, norm(b.p.x[i] - x0[i]) - (gap - skin));
+    }
+    return m;
+  };
   ASSERT_TRUE(b.nl.needs_rebuild(b.p, walls, skin));
   const uint64_t epoch = b.nl.epoch;
   b.nl.local_cutoffs = 0;
-  EXPECT_FALSE(b.nl.recheck(b.p, {}, skin));
-  EXPECT_EQ(b.nl.stats.checks, 0u);  // off: none ran
-  b.nl.local_cutoffs = 2;
-  // With the floor: walls count each particle's whole displacement (two skins at the top).
   EXPECT_FALSE(b.nl.recheck(b.p, walls, skin));
+  EXPECT_EQ(b.nl.stats.checks, 0u);  // off: none ran
   EXPECT_EQ(b.nl.epoch, epoch);
-  // Without it, the pairs alone: kept.
-  ASSERT_TRUE(b.nl.recheck(b.p, {}, skin));
-  EXPECT_EQ(b.nl.stats.checks, 2u);
+  b.nl.local_cutoffs = 2;
+  ASSERT_TRUE(b.nl.recheck(b.p, walls, skin));
+  EXPECT_EQ(b.nl.stats.checks, 1u);
   EXPECT_EQ(b.nl.stats.deferred, 1u);
   EXPECT_NE(b.nl.epoch, epoch);
   const NeighborList::Reference& r = b.nl.reference();
@@ -658,33 +699,47 @@ TEST(NeighborList, LocalCheckCarriesItsBounds) {
   EXPECT_GT(r.carried_pair, 0.0);
   EXPECT_LE(r.carried_pair, g * 2 * edge * (1 + 1e-6));
   EXPECT_LE(r.carried_pair, NeighborList::kRecheckRoom * skin);
-  EXPECT_NEAR(r.carried_move, g * zhi, 1e-12 * H);
+  ASSERT_EQ(r.carried_wall.size(), 1u);
+  // (Gaps and displacements are differences of coordinates of about 1 cm: round-off of
+  // 1e-18 m, far below the tolerance of 1e-12 skin.)
+  EXPECT_NEAR(r.carried_wall[0], wall_bound(walls[0]), 1e-12 * skin);
+  EXPECT_LT(r.carried_wall[0], -0.005);  // every particle far further from the floor than it moved
   EXPECT_EQ(r.from, b.p.x);
   EXPECT_EQ(b.nl.drift_origin(), r.from.data());
-  // Nothing moved since the check: the measure is what the check carried (with the floor,
-  // which has not moved: the largest displacement since the build).
+  // Nothing moved since the check: the measure is what the check carried.
   Drift none;
   for (size_t i = 0; i < b.p.size(); ++i) b.nl.add_drift(none, b.p, i);
   EXPECT_EQ(b.nl.rebuild_measure(none, {}), r.carried_pair);
-  EXPECT_DOUBLE_EQ(b.nl.rebuild_measure(none, walls), r.carried_move);
-  // 0.1 skin more for one particle since the check: added to both bounds.
+  EXPECT_EQ(b.nl.rebuild_measure(none, walls), r.carried_pair);
+  // 0.1 skin more for one particle since the check: added to both bounds; the floor moved
+  // up by its room and 0.8 skin more: its bound (0.9 skin) passes the pairs' (at most 0.74).
   b.p.x[7] += Vec3{0, 0.1 * skin, 0};
   Drift more;
   for (size_t i = 0; i < b.p.size(); ++i) b.nl.add_drift(more, b.p, i);
-  // (The 0.1 skin is read back as a difference of coordinates of about 1 cm: 1e-18 m of
-  // round-off, far below the tolerance of 1e-12 skin.)
   EXPECT_NEAR(b.nl.rebuild_measure(more, {}), r.carried_pair + 0.1 * skin, 1e-12 * skin);
-  EXPECT_NEAR(b.nl.rebuild_measure(more, walls), std::max(r.carried_pair, r.carried_move) + 0.1 * skin, 1e-12 * skin);
+  std::vector<Wall> raised = walls;
+  raised[0].point.z += -r.carried_wall[0] + 0.8 * skin;
+  EXPECT_NEAR(b.nl.rebuild_measure(more, raised), 0.9 * skin, 1e-9 * skin);
   // A build starts from its own positions again.
   b.nl.build(b.p, walls, b.d, skin, 0.0, false);
   EXPECT_TRUE(b.nl.reference().from.empty());
   EXPECT_EQ(b.nl.reference().carried_pair, 0.0);
+  EXPECT_TRUE(b.nl.reference().carried_wall.empty());
   EXPECT_EQ(b.nl.drift_origin(), b.nl.reference().x.data());
   // A shear of 3.2 skins: neighbouring blocks part by 1.28 skins: a build is due.
   const std::vector<Vec3> x1 = b.p.x;
   for (size_t i = 0; i < b.p.size(); ++i) b.p.x[i] += Vec3{2 * g * x1[i].z, 0, 0};
-  ASSERT_TRUE(b.nl.needs_rebuild(b.p, {}, skin));
-  EXPECT_FALSE(b.nl.recheck(b.p, {}, skin));
+  ASSERT_TRUE(b.nl.needs_rebuild(b.p, walls, skin));
+  EXPECT_FALSE(b.nl.recheck(b.p, walls, skin));
+  // A side wall 0.1 mm from the bed: the first shear again, and the particles along it at
+  // the top moved 1.6 skins with less room than that.
+  Bed c(false, 61);
+  std::vector<Wall> side{walls[0], plane_at({-1e-4, 0, 0}, {1, 0, 0})};
+  c.nl.build(c.p, side, c.d, skin, 0.0, false);
+  for (size_t i = 0; i < c.p.size(); ++i) c.p.x[i] += Vec3{g * x0[i].z, 0, 0};
+  ASSERT_TRUE(c.nl.needs_rebuild(c.p, side, skin));
+  EXPECT_GT(wall_bound(side[1]), NeighborList::kRecheckRoom * skin);
+  EXPECT_FALSE(c.nl.recheck(c.p, side, skin));
   // Radii that change between builds (thermal fields): no check.
   ParticleStore q = b.p;
   q.enable_thermal(293.15);
