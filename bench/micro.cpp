@@ -431,6 +431,31 @@ void BM_CaseNeighborBuild(benchmark::State& st) {
   st.counters["lost_contacts"] = double(s->nl.stats.lost_contacts);
 }
 
+/// The local check before a list build (NeighborList::recheck) on a case in mid-run
+/// (bench_case(), warmed as BM_CaseNeighborBuild: the displacements since the warm-up's last
+/// build): its pass over the particles, the blocks and, where it keeps the lists, the copy
+/// of the drift's origin; to set against BM_CaseNeighborBuild, the build it saves. Counter
+/// `kept`: whether it keeps the lists for that state. Arg: threads.
+void BM_CaseLocalCheck(benchmark::State& st) {
+  const std::string path = bench_case();
+  const char* warm = std::getenv("COHDEM_BENCH_WARM");
+  std::unique_ptr<System> s;
+  try {
+    const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
+    s = build_system(c);
+    s->prepare();
+    s->run(uint64_t(warm ? std::atol(warm) : 300));
+  } catch (const std::exception& e) {
+    st.SkipWithError((path + ": " + e.what()).c_str());
+    return;
+  }
+  s->nl.parallel_min = s->cfg.parallel_min;
+  bool kept = false;
+  for (auto _ : st) kept = s->nl.recheck(s->particles, s->walls, s->cfg.skin);
+  st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
+  st.counters["kept"] = kept;
+}
+
 /// The force loop's list screening alone (sim/screen.hpp) on a case in mid-run (bench_case(),
 /// warmed as BM_CaseNeighborBuild): every entry of the lists screened in the kernel's batches
 /// of kBatch, by the AVX2 path and by the AVX-512 one in turn within each iteration (the
@@ -571,6 +596,8 @@ void register_all() {
   iters(benchmark::RegisterBenchmark("BM_CaseStep", BM_CaseStep))->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_CaseScreen", BM_CaseScreen)->Unit(benchmark::kMicrosecond);
   iters(benchmark::RegisterBenchmark("BM_CaseNeighborBuild", BM_CaseNeighborBuild))
+      ->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+  iters(benchmark::RegisterBenchmark("BM_CaseLocalCheck", BM_CaseLocalCheck))
       ->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
   benchmark::RegisterBenchmark("BM_NeighborBuild", BM_NeighborBuild)->Arg(32)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_NeighborBuildWithHistory", BM_NeighborBuildWithHistory)

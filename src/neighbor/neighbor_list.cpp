@@ -935,11 +935,12 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
   const Vec3* const x = p.x.data();
   const Vec3* const x0 = ref_.x.data();
   const Vec3 blo = box_lo_;
+  // (Truncation, not std::floor: a library call in a build without SSE4.1, 3 a particle.)
   auto block_of = [&](const Vec3& r) {
     long k[3];
     for (int d = 0; d < 3; ++d) {
-      const double t = std::floor((r[d] - blo[d]) * inv[d]);
-      k[d] = t >= 0 ? std::min(nb[d] - 1, long(t)) : 0;  // NaN and below the box: 0
+      const double t = (r[d] - blo[d]) * inv[d];
+      k[d] = t > 0 ? (t < double(nb[d]) ? std::min(nb[d] - 1, long(t)) : nb[d] - 1) : 0;  // NaN, below: 0
     }
     return (k[2] * nb[1] + k[1]) * nb[0] + k[0];
   };
@@ -978,22 +979,26 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
   Vec3 glo{INFINITY, INFINITY, INFINITY}, ghi{-INFINITY, -INFINITY, -INFINITY};
   double gd2 = 0;
   for (long q = 0; q < nblk; ++q) {
-    const double* const r = B + size_t(q) * W;
+    double* const r = B + size_t(q) * W;
     glo = {std::min(glo.x, r[0]), std::min(glo.y, r[1]), std::min(glo.z, r[2])};
     ghi = {std::max(ghi.x, r[3]), std::max(ghi.y, r[4]), std::max(ghi.z, r[5])};
     gd2 = std::max(gd2, r[6]);
+    r[6] = std::sqrt(r[6]);  // the block's largest displacement, from here on
   }
   const double move = std::sqrt(gd2), global = std::min(2 * move, norm(ghi - glo));
-  double local = 0;
-#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(max : local)
+  // Each pair of neighbours once: a block with itself and the 13 ahead of it (in periodic
+  // directions of one or two blocks, some of them the same block or the same pair again).
+  // Squares compared, one square root at the end.
+  double local2 = 0;
+#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(max : local2)
   for (long q = 0; q < nblk; ++q) {
     const double* const a = B + size_t(q) * W;
     if (!(a[3] >= a[0])) continue;  // empty
     const long k0 = q % nb[0], k1 = (q / nb[0]) % nb[1], k2 = q / (nb[0] * nb[1]);
-    const double da = std::sqrt(a[6]);
-    for (int o2 = -1; o2 <= 1; ++o2)
-      for (int o1 = -1; o1 <= 1; ++o1)
-        for (int o0 = -1; o0 <= 1; ++o0) {
+    const double da = a[6];
+    for (int o2 = 0; o2 <= 1; ++o2)
+      for (int o1 = o2 ? -1 : 0; o1 <= 1; ++o1)
+        for (int o0 = (o2 || o1) ? -1 : 0; o0 <= 1; ++o0) {
           long c[3] = {k0 + o0, k1 + o1, k2 + o2};
           bool out = false;
           for (int d = 0; d < 3; ++d) {
@@ -1006,9 +1011,11 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
           if (!(e[3] >= e[0])) continue;
           const Vec3 jl{std::min(a[0], e[0]), std::min(a[1], e[1]), std::min(a[2], e[2])};
           const Vec3 jh{std::max(a[3], e[3]), std::max(a[4], e[4]), std::max(a[5], e[5])};
-          local = std::max(local, std::min(norm(jh - jl), da + std::sqrt(e[6])));
+          const double sum = da + e[6];
+          local2 = std::max(local2, std::min(norm2(jh - jl), sum * sum));
         }
   }
+  const double local = std::sqrt(local2);
   // Particles in blocks that are not neighbours (two or more slabs apart in some direction
   // that has three or more) were more than a block's edge apart at the build (less a
   // rounding allowance): they stay out of range while their relative displacement stays
@@ -1049,7 +1056,10 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     m = std::max(m, wall_room_[w] + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
   if (!(m <= kRecheckRoom * skin)) return false;
   // The lists hold: the drift from here on, the check's bounds carried.
-  ref_.from.assign(p.x.begin(), p.x.end());
+  ref_.from.resize(n);
+  Vec3* const from = ref_.from.data();
+#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1)
+  for (size_t i = 0; i < n; ++i) from[i] = x[i];
   origin_ = ref_.from.data();
   ref_.carried_pair = pair;
   ref_.carried_wall = wall_room_;
