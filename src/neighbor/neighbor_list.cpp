@@ -960,18 +960,37 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
       r[6] = 0;
     }
     const size_t lo = n * size_t(t) / size_t(tn), hi = n * size_t(t + 1) / size_t(tn);
+    // Particles come mostly in cell order (the last re-sort's), so runs of them share a
+    // block: the record is kept in registers over a run and stored when the block changes
+    // (a load, min or max and store a particle per field would wait on the store before).
+    long cur = -1;
+    double* r = nullptr;
+    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0;
+    auto flush = [&] {
+      if (r) { r[0] = a0; r[1] = a1; r[2] = a2; r[3] = a3; r[4] = a4; r[5] = a5; r[6] = a6; }
+    };
     for (size_t i = lo; i < hi; ++i) {
       const Vec3 dx = x[i] - x0[i];
-      double* const r = b.data() + size_t(block_of(x0[i])) * W;
-      r[0] = std::min(r[0], dx.x); r[1] = std::min(r[1], dx.y); r[2] = std::min(r[2], dx.z);
-      r[3] = std::max(r[3], dx.x); r[4] = std::max(r[4], dx.y); r[5] = std::max(r[5], dx.z);
-      r[6] = std::max(r[6], norm2(dx));
+      const long q = block_of(x0[i]);
+      if (q != cur) {
+        flush();
+        cur = q;
+        r = b.data() + size_t(q) * W;
+        a0 = r[0]; a1 = r[1]; a2 = r[2]; a3 = r[3]; a4 = r[4]; a5 = r[5]; a6 = r[6];
+      }
+      a0 = std::min(a0, dx.x); a1 = std::min(a1, dx.y); a2 = std::min(a2, dx.z);
+      a3 = std::max(a3, dx.x); a4 = std::max(a4, dx.y); a5 = std::max(a5, dx.z);
+      a6 = std::max(a6, norm2(dx));
     }
+    flush();
   }
   double* const B = blk_[0].data();
   for (int t = 1; t < team; ++t) {
     const double* const o = blk_[size_t(t)].data();
-    for (size_t q = 0; q < size_t(nblk) * W; ++q) B[q] = (q % W) < 3 ? std::min(B[q], o[q]) : std::max(B[q], o[q]);
+    for (size_t q = 0; q < size_t(nblk) * W; q += W) {
+      for (size_t c = 0; c < 3; ++c) B[q + c] = std::min(B[q + c], o[q + c]);
+      for (size_t c = 3; c < W; ++c) B[q + c] = std::max(B[q + c], o[q + c]);
+    }
   }
   // The global bounds (as rebuild_measure's) and the largest bound over two neighbouring
   // blocks (a block with itself included), each the smaller of the joint box's diagonal and
