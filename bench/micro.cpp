@@ -411,19 +411,25 @@ void BM_CasePrefetch(benchmark::State& st) {
 /// run for COHDEM_BENCH_WARM steps (default 300), so that its particles have left the cell
 /// order of the last re-sort as they do between re-sorts, then the lists are rebuilt from that
 /// state (no re-sort; the live contacts' history carried over each time). Arg: threads.
-void BM_CaseNeighborBuild(benchmark::State& st) {
+/// The case of bench_case() on `threads` threads, run for COHDEM_BENCH_WARM steps (default
+/// 300); null (the benchmark skipped with the error) where it cannot be loaded or run.
+std::unique_ptr<System> warmed_case(benchmark::State& st, const long threads) {
   const std::string path = bench_case();
   const char* warm = std::getenv("COHDEM_BENCH_WARM");
-  std::unique_ptr<System> s;
   try {
-    const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
-    s = build_system(c);
+    std::unique_ptr<System> s = build_system(load_case_file(path, {"simulation.threads=" + std::to_string(threads)}));
     s->prepare();
     s->run(uint64_t(warm ? std::atol(warm) : 300));
+    return s;
   } catch (const std::exception& e) {
     st.SkipWithError((path + ": " + e.what()).c_str());
-    return;
+    return nullptr;
   }
+}
+
+void BM_CaseNeighborBuild(benchmark::State& st) {
+  const std::unique_ptr<System> s = warmed_case(st, st.range(0));
+  if (!s) return;
   const double reach = s->reach();
   for (auto _ : st) s->nl.build(s->particles, s->walls, s->cfg.domain, s->cfg.skin, reach, false);
   st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(s->particles.size()));
@@ -437,18 +443,8 @@ void BM_CaseNeighborBuild(benchmark::State& st) {
 /// of the drift's origin; to set against BM_CaseNeighborBuild, the build it saves. Counter
 /// `kept`: whether it keeps the lists for that state. Arg: threads.
 void BM_CaseLocalCheck(benchmark::State& st) {
-  const std::string path = bench_case();
-  const char* warm = std::getenv("COHDEM_BENCH_WARM");
-  std::unique_ptr<System> s;
-  try {
-    const Case c = load_case_file(path, {"simulation.threads=" + std::to_string(st.range(0))});
-    s = build_system(c);
-    s->prepare();
-    s->run(uint64_t(warm ? std::atol(warm) : 300));
-  } catch (const std::exception& e) {
-    st.SkipWithError((path + ": " + e.what()).c_str());
-    return;
-  }
+  const std::unique_ptr<System> s = warmed_case(st, st.range(0));
+  if (!s) return;
   s->nl.parallel_min = s->cfg.parallel_min;
   bool kept = false;
   for (auto _ : st) kept = s->nl.recheck(s->particles, s->walls, s->cfg.skin);
@@ -467,17 +463,8 @@ void BM_CaseScreen(benchmark::State& st) {
     st.SkipWithError("this CPU or build has no AVX-512 screening");
     return;
   }
-  const std::string path = bench_case();
-  const char* warm = std::getenv("COHDEM_BENCH_WARM");
-  std::unique_ptr<System> s;
-  try {
-    s = build_system(load_case_file(path, {"simulation.threads=1"}));
-    s->prepare();
-    s->run(uint64_t(warm ? std::atol(warm) : 300));
-  } catch (const std::exception& e) {
-    st.SkipWithError((path + ": " + e.what()).c_str());
-    return;
-  }
+  const std::unique_ptr<System> s = warmed_case(st, 1);
+  if (!s) return;
   const NeighborList& nl = s->nl;
   const long n = long(s->particles.size());
   const uint32_t entries = uint32_t(std::min({nl.jdx.size(), nl.image.size(), nl.hist.live.size()}));
