@@ -168,9 +168,10 @@ class NeighborList {
   /// the relative displacement of their particles (the diagonal of their displacements'
   /// joint box, or the sum of their largest displacements); particles in blocks that are not
   /// neighbours were more than a block's edge apart at the build, and need only the global
-  /// bound to stay below that edge less the contact range. A sheared bed (a chute, a ring
-  /// shear cell) moves its neighbours nearly alike while its top and base part by the whole
-  /// flow: the lists hold far longer than the global bound says. Where the check finds the
+  /// bound to stay below that edge less the contact range. A sheared bed many blocks deep
+  /// (a chute) moves its neighbours nearly alike while its top and base part by the whole
+  /// flow: the lists hold far longer than the global bound says (a bed a few particles high
+  /// across its shear, a ring shear cell's, spans too few blocks). Where the check finds the
   /// lists good (with kRecheckRoom of the skin to spare), the drift is measured from the
   /// present positions on (the drift origin) and the check's bounds are carried (added to
   /// the trigger's), so the per-step cost stays one reduction; the trigger fires again when
