@@ -778,7 +778,7 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   ref_.carried_pair = 0;
   ref_.carried_wall.clear();
   origin_ = ref_.x.data();
-  dom_ = dom;
+  periodic_ = dom.periodic;
   skin_ = skin;
   range_ = 2 * rmax + reach;
   reach_ = reach;
@@ -940,7 +940,7 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     long k[3];
     for (int d = 0; d < 3; ++d) {
       const double t = (r[d] - blo[d]) * inv[d];
-      k[d] = t > 0 ? (t < double(nb[d]) ? std::min(nb[d] - 1, long(t)) : nb[d] - 1) : 0;  // NaN, below: 0
+      k[d] = t > 0 ? (t < double(nb[d]) ? long(t) : nb[d] - 1) : 0;  // NaN, below: 0
     }
     return (k[2] * nb[1] + k[1]) * nb[0] + k[0];
   };
@@ -1026,7 +1026,7 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
           bool out = false;
           for (int d = 0; d < 3; ++d) {
             if (c[d] >= 0 && c[d] < nb[d]) continue;
-            if (dom_.periodic[d]) c[d] = (c[d] + nb[d]) % nb[d];
+            if (periodic_[d]) c[d] = (c[d] + nb[d]) % nb[d];
             else out = true;
           }
           if (out) continue;

@@ -248,9 +248,9 @@ class NeighborList {
  private:
   Reference ref_;
   const Vec3* origin_ = nullptr;  // ref_.from where a local check set it, else ref_.x
-  // The last build's settings, for the local check: the domain, skin, and the contact range
-  // 2 r_max + reach.
-  Domain dom_;
+  // The last build's settings, for the local check: the domain's periodic directions, the
+  // skin, and the contact range 2 r_max + reach.
+  std::array<bool, 3> periodic_{};
   double skin_ = 0, range_ = 0, reach_ = 0;
   Vec3 box_lo_, box_hi_;  // the build's bounds (periodic directions: the domain's)
   // The local check's blocks (the build's positions binned), per thread: each block's
