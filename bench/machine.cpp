@@ -2,7 +2,7 @@
 // (docs/performance-history.md, twenty-fourth and twenty-fifth rounds), and give a reading of a
 // machine before a benchmark session.
 //
-//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|RemoteLines|OmpSync|Streams'
+//   ./build/cohdem_bench --benchmark_filter='CacheAfterPause|CoreToCore|RemoteLines|OmpSync|Streams|FirstTouch'
 //
 // How long data stays in this core's caches while the core does something else: the force
 // calls right after a neighbor-list build run slower, and so do those after a pause of the
@@ -42,10 +42,25 @@
 // operation: kind 0 an empty parallel region (fork and join, what the force loop pays once
 // per call), kind 1 a barrier inside one region (what a team kept across steps would pay
 // instead).
+//
+// BM_FirstTouch/KiB:<K>/huge:<0|1>: what the first write to fresh memory costs. Each iteration
+// maps K KiB of new anonymous memory (aligned to 2 MiB), with huge:1 advised MADV_HUGEPAGE,
+// and writes one byte in every 4 KiB page (timed), then unmaps it (not timed). The counter
+// is the time per 4 KiB page (with huge pages, per 4 KiB of the huge pages' memory; a block
+// under 2 MiB, as the 1024 KiB one, holds no huge page whatever the advice). It
+// is what an array pays the first time the time loop writes it (an array grown in the loop,
+// a buffer first used at the first list build that carries contacts): on the seventy-third
+// round's Zen 5 VM 10-11 us a 4 KiB page, 2.6 ms a MiB, and 0.2 us with huge pages (0.11 ms
+// a 2 MiB page), where a page fault on an ordinary host costs well under 1 us
+// (docs/performance-history.md, seventy-third round). Linux only (elsewhere: skipped).
 #include <benchmark/benchmark.h>
 #include <omp.h>
 #include <pthread.h>
 #include <sched.h>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include <atomic>
 #include <chrono>
@@ -286,6 +301,41 @@ void BM_Streams(benchmark::State& st) {
   st.counters["ns_per_element"] =
       benchmark::Counter(double(st.iterations()) * double(kN), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+
+void BM_FirstTouch(benchmark::State& st) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr size_t kPage = 4096, kHuge = size_t(2) << 20;
+  const size_t bytes = size_t(st.range(0)) * 1024;
+  const bool huge = st.range(1) == 1;
+  for (auto _ : st) {
+    st.PauseTiming();
+    // Room for a 2 MiB boundary inside, so that huge pages can back all of `bytes`.
+    void* const m = mmap(nullptr, bytes + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (m == MAP_FAILED) {
+      st.SkipWithError("mmap failed");
+      return;
+    }
+    char* const p = reinterpret_cast<char*>((reinterpret_cast<uintptr_t>(m) + kHuge - 1) & ~uintptr_t(kHuge - 1));
+    if (huge) (void)madvise(p, bytes, MADV_HUGEPAGE);
+    st.ResumeTiming();
+    for (size_t o = 0; o < bytes; o += kPage) p[o] = 1;
+    benchmark::ClobberMemory();
+    st.PauseTiming();
+    munmap(m, bytes + kHuge);
+    st.ResumeTiming();
+  }
+  st.counters["per_4KiB_page"] = benchmark::Counter(double(st.iterations()) * double(bytes / kPage),
+                                                    benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+#else
+  st.SkipWithError("Linux only");
+#endif
+}
+
+BENCHMARK(BM_FirstTouch)
+    ->ArgsProduct({{1024, 16384}, {0, 1}})
+    ->ArgNames({"KiB", "huge"})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 
 BENCHMARK(BM_Streams)
     ->ArgsProduct({{4, 8, 12, 16, 18, 20, 24}, {0, 1, 2}})
