@@ -508,7 +508,8 @@ int run_case(Case c, const RunOptions& opt) {
   // rebuild fell between two of their steps) and the steps taken again after those; of the
   // sweeps, those evaluated near a rebuild on the displacements' forecast, and the calls
   // there that took plain steps; the calls that took plain steps because the contacts were
-  // dense (SimConfig::pair_max_contacts). `tuning`: the choice between two steps a sweep and
+  // dense (SimConfig::pair_max_contacts); `snapshots`: the states saved for undoing a sweep
+  // (after each list build and every 256 steps since). `tuning`: the choice between two steps a sweep and
   // sweep_steps by timing (System::SweepTune): the choices made, the steps chosen last and the
   // medians it chose on, ns a particle-step of the force loop (null until a choice is made).
   const System::SweepTune& tune = s.sweep_tune();
@@ -521,6 +522,7 @@ int run_case(Case c, const RunOptions& opt) {
                      {"forecast", s.pair_stats().forecast},
                      {"near_plain", s.pair_stats().near_plain},
                      {"dense_plain", s.pair_stats().dense_plain},
+                     {"snapshots", s.pair_stats().snapshots},
                      {"tuning", tune.tunings == 0 ? nlohmann::json(nullptr)
                                                   : nlohmann::json{{"choices", tune.tunings},
                                                                    {"steps_per_sweep", tune.best > 0 ? tune.best : 0},

@@ -167,8 +167,10 @@ class System {
   /// sweep is not (two steps: about 1.15x on a one-thread 10^6-particle gas, 1.04x on two
   /// threads; four on one thread 1.11x over two). If the lists turn out to need a rebuild
   /// between two of the steps, the state goes back to the last snapshot (taken after each
-  /// list build and every 256 steps taken in sweeps) and the steps since are taken again one
-  /// at a time. Near a rebuild (SimConfig::pair_margin) it takes plain steps unless the
+  /// list build and every 256 steps since) and the steps since are taken again one at a
+  /// time. A step_once between sweeps (the runner's, after which a series row, a frame or a
+  /// checkpoint is written) keeps the snapshot where it can be taken again the same way
+  /// (replayable(), before and after it). Near a rebuild (SimConfig::pair_margin) it takes plain steps unless the
   /// displacements' recent growth shows the sweep's last step stays clear of it.
   /// Returns the steps taken: k, or fewer where sweep_steps() is, or where the forecast cuts
   /// the sweep short near a rebuild (two at least).
@@ -182,6 +184,12 @@ class System {
   int sweep_steps() const;
   /// Whether step_sweep can evaluate several steps in one sweep now (SimConfig::pair_min).
   bool pairs_allowed() const;
+  /// Whether a plain step taken now from the present state could be taken again from a
+  /// snapshot of it with the same result: nothing the snapshot does not hold changes in it
+  /// (no thermal model, pours, contact recording or particles carried by walls, no radius
+  /// growth tracked, no particles or walls changed since the last prepare, every wall at
+  /// rest). pairs_allowed() asks it too.
+  bool replayable() const;
   /// Whether the environment variable COHDEM_PAIR=0 switches step_sweep's sweeps off (for
   /// comparisons; the case file's `pair_steps = false` does the same).
   static bool pairs_off_by_env();
@@ -205,6 +213,8 @@ class System {
     uint64_t forecast = 0, near_plain = 0;
     /// Calls that took plain steps because the contacts were dense (SimConfig::pair_max_contacts).
     uint64_t dense_plain = 0;
+    /// Snapshots taken (step_sweep's way back).
+    uint64_t snapshots = 0;
   };
   const PairStats& pair_stats() const { return pair_stats_; }
   /// How step_sweep chooses between two steps a sweep and SimConfig::sweep_steps where
@@ -313,7 +323,8 @@ class System {
     void restore(HistoryArray& h) const;
   };
   /// step_sweep's way back: the moved state and the contact history at a step after the
-  /// lists' last build, from which sweeps alone led to the present (`swept`: their steps).
+  /// lists' last build, from which sweeps and replayable plain steps led to the present
+  /// (`swept`: their steps).
   struct Snapshot {
     std::vector<Vec3> x, v, omega;
     SparseHistory hist, whist;

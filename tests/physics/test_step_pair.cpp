@@ -90,17 +90,24 @@ struct End {
 };
 
 // `steps` steps (sweeps near a rebuild only below `margin`, SimConfig::pair_margin): plain
-// (step_once(true), the last one closed), or in sweeps of `sweep` steps where it can.
+// (step_once(true), the last one closed), or in sweeps of `sweep` steps where it can. With
+// `plain_every`, a closed step (step_once(false), as the runner takes before it writes a
+// series row) once every that many steps, and an opened one after it, as between sweeps.
 End run(const Law& law, bool pairs, int steps, double margin, int threads = 1, bool column = false, int sweep = 2,
-        double ahead = 4, double skin = 1e-4) {
+        double ahead = 4, double skin = 1e-4, int plain_every = 0) {
   auto s = make_box(law, threads, column, skin);
   s->cfg.pair_margin = margin;
   s->cfg.pair_ahead = ahead;
   int k = 0;
   s->step_once(true);
   ++k;
+  int next_plain = plain_every;
   while (k < steps - 1) {
-    if (pairs && k + sweep < steps) {
+    if (plain_every > 0 && k >= next_plain) {
+      s->step_once(false);
+      ++k;
+      next_plain += plain_every;
+    } else if (pairs && s->mid_step() && k + sweep < steps) {
       k += s->step_sweep(sweep);
     } else {
       s->step_once(true);
@@ -216,6 +223,62 @@ TEST(StepPair, SweepsOfThreeAndFourStepsEndInTheStateOfPlainSteps) {
       }
     }
   });
+}
+
+// The runner's plain steps between sweeps (a series row written after them): the snapshot
+// an undone sweep goes back to outlasts them where they can be taken again from it
+// (System::replayable), and the undoing takes them again with the sweep's steps. The box
+// with a skin of 0.4 mm, a closed plain step every 6 steps, sweeps of four with every one
+// let start (margin 1, pair_ahead -1): many undone across such steps. The same end as plain
+// steps, bit for bit, with fewer snapshots than closed steps (each closed step took a new
+// one before).
+TEST(StepPair, PlainStepsBetweenSweepsKeepTheSnapshot) {
+  omp_set_num_threads(1);
+  constexpr int kSteps = 401, kEvery = 6;
+  constexpr double kSkin = 4e-4;
+  each_law_and_path([&](const Law& law, const std::string& path) {
+    const End a = run(law, false, kSteps, 1.0, 1, false, 2, 4, kSkin, kEvery);
+    const End b = run(law, true, kSteps, 1.0, 1, false, 4, -1.0, kSkin, kEvery);
+    expect_same(a, b, path);
+    EXPECT_GT(b.pairs.pairs, 10u) << path;
+    EXPECT_GT(b.pairs.replays, 0u) << path;
+    const uint64_t closed = uint64_t(kSteps / kEvery);
+    EXPECT_LT(b.pairs.snapshots, closed) << path;
+    EXPECT_LE(b.pairs.snapshots, b.builds + 2) << path;  // after each build (and the first), and rarely more
+    std::printf("[info] %s: %llu builds, %llu closed plain steps, %llu sweeps, %llu undone (%llu steps taken again), "
+                "%llu snapshots\n",
+                path.c_str(), (unsigned long long)b.builds, (unsigned long long)closed,
+                (unsigned long long)b.pairs.pairs, (unsigned long long)b.pairs.replays,
+                (unsigned long long)b.pairs.replayed_steps, (unsigned long long)b.pairs.snapshots);
+  });
+}
+
+// What the snapshot cannot hold ends it: a plain step with a wall in motion (its position
+// is not in the snapshot) makes the next sweep take a new one; a plain step with every wall
+// at rest does not. The box with a skin of 1.5 mm, whose lists outlast these steps.
+TEST(StepPair, APlainStepWithAWallInMotionEndsTheSnapshot) {
+  omp_set_num_threads(1);
+  auto s = make_box(laws()[0], 1, false, 1.5e-3);
+  s->cfg.pair_margin = 1.0;
+  s->cfg.pair_ahead = 0;
+  s->step_once(true);
+  s->step_sweep(2);
+  const uint64_t builds = s->nl.stats.builds, first = s->pair_stats().snapshots;
+  EXPECT_EQ(first, 1u);
+  EXPECT_TRUE(s->replayable());
+  s->step_once(false);  // at rest: kept
+  s->step_once(true);
+  s->step_sweep(2);
+  EXPECT_EQ(s->pair_stats().snapshots, first);
+  s->walls[1].velocity = {1e-3, 0, 0};  // a side wall moving
+  EXPECT_FALSE(s->replayable());
+  s->step_once(true);
+  s->walls[1].velocity = {};
+  s->step_once(true);
+  s->step_sweep(2);
+  EXPECT_EQ(s->pair_stats().snapshots, first + 1);
+  EXPECT_EQ(s->pair_stats().pairs, 3u);
+  EXPECT_EQ(s->nl.stats.builds, builds);  // (no build between: the snapshots are the steps')
 }
 
 // How many steps a sweep takes: SimConfig::sweep_steps on one thread from sweep_min
