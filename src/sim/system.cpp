@@ -280,10 +280,10 @@ void System::step_once(bool open_next) {
   // runner's steps after which something is written came between sweeps, and each of them
   // cost a new snapshot (at 10^6 particles 15-25 ms, more than a step; a series row every
   // 100 steps: ten snapshots in 1000 steps instead of three).
-  const bool keep = snap_.valid && replayable();
+  const bool keep = snap_.valid && replayable() && snap_.same_config(cfg);
   begin_step();
   end_step(open_next);
-  if (keep && replayable())
+  if (keep && replayable() && snap_.same_config(cfg))
     ++snap_.swept;  // steps since the snapshot, which an undone sweep takes again
   else
     snap_.valid = false;
@@ -583,6 +583,8 @@ void System::take_snapshot() {
   snap_.time = time;
   snap_.step = step;
   snap_.builds = nl.epoch;
+  snap_.dt = cfg.dt;
+  snap_.gravity = cfg.gravity;
   snap_.swept = 0;
   snap_.valid = true;
   ++pair_stats_.snapshots;
@@ -684,7 +686,7 @@ int System::step_sweep(const int k) {
     for (int q = 1; q < K; ++q) step_once(true);
     return K;
   }
-  if (!snap_.valid || snap_.builds != nl.epoch || snap_.swept >= kSnapSteps ||
+  if (!snap_.valid || snap_.builds != nl.epoch || !snap_.same_config(cfg) || snap_.swept >= kSnapSteps ||
       (close && snap_.swept >= kCloseSnapSteps))
     take_snapshot();
   // All K steps in one sweep of the force loop (ForceContext::drift2, drift_more): `at[q]`

@@ -331,6 +331,11 @@ class System {
     double time = 0;
     uint64_t step = 0, builds = 0, swept = 0;
     bool valid = false;
+    /// The time step and gravity the steps since were taken with: an undone sweep takes them
+    /// again with the present ones, so a caller's change of either ends the snapshot.
+    double dt = 0;
+    Vec3 gravity{};
+    bool same_config(const SimConfig& c) const { return dt == c.dt && gravity == c.gravity; }
   };
   void take_snapshot();
   Snapshot snap_;

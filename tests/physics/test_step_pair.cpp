@@ -254,8 +254,9 @@ TEST(StepPair, PlainStepsBetweenSweepsKeepTheSnapshot) {
 }
 
 // What the snapshot cannot hold ends it: a plain step with a wall in motion (its position
-// is not in the snapshot) makes the next sweep take a new one; a plain step with every wall
-// at rest does not. The box with a skin of 1.5 mm, whose lists outlast these steps.
+// is not in the snapshot) makes the next sweep take a new one, and so does gravity changed
+// between steps; a plain step with every wall at rest does not. The box with a skin of 1.5
+// mm, whose lists outlast these steps.
 TEST(StepPair, APlainStepWithAWallInMotionEndsTheSnapshot) {
   omp_set_num_threads(1);
   auto s = make_box(laws()[0], 1, false, 1.5e-3);
@@ -277,7 +278,17 @@ TEST(StepPair, APlainStepWithAWallInMotionEndsTheSnapshot) {
   s->step_once(true);
   s->step_sweep(2);
   EXPECT_EQ(s->pair_stats().snapshots, first + 1);
-  EXPECT_EQ(s->pair_stats().pairs, 3u);
+  // So does a change of gravity (or of the time step) between the steps: taken again from
+  // the snapshot, the steps before it would see the new one.
+  s->cfg.gravity = {0, 0, -9.0};
+  s->step_once(false);
+  s->step_once(true);
+  s->step_sweep(2);
+  EXPECT_EQ(s->pair_stats().snapshots, first + 2);
+  s->cfg.gravity = {0, 0, -9.81};  // changed back before a sweep, with no plain step between
+  s->step_sweep(2);
+  EXPECT_EQ(s->pair_stats().snapshots, first + 3);
+  EXPECT_EQ(s->pair_stats().pairs, 5u);
   EXPECT_EQ(s->nl.stats.builds, builds);  // (no build between: the snapshots are the steps')
 }
 
