@@ -276,14 +276,15 @@ void System::step_once(bool open_next) {
   // step_sweep's snapshot stays where an undone sweep can take this step again from it with
   // the same result (the undoing takes every step since the snapshot as a plain step, and a
   // plain step's state is the same, bit for bit, whether or not it was opened by the force
-  // loop): checked before the step and after it (a wall's control may set it moving). The
+  // loop): replayable() checked before the step and after it (a wall's control may set it
+  // moving), the time step and gravity before it (the step does not change them). The
   // runner's steps after which something is written came between sweeps, and each of them
   // cost a new snapshot (at 10^6 particles 15-25 ms, more than a step; a series row every
   // 100 steps: ten snapshots in 1000 steps instead of three).
-  const bool keep = snap_.valid && replayable() && snap_.same_config(cfg);
+  const bool keep = snap_.valid && snap_.same_config(cfg) && replayable();
   begin_step();
   end_step(open_next);
-  if (keep && replayable() && snap_.same_config(cfg))
+  if (keep && replayable())
     ++snap_.swept;  // steps since the snapshot, which an undone sweep takes again
   else
     snap_.valid = false;
@@ -634,9 +635,10 @@ int System::step_sweep(const int k) {
   begin_step();  // the first step's opening is done; the rebuild decision before it
   // Near a rebuild (the displacements since the build past SimConfig::pair_margin of what
   // triggers one): plain steps. A snapshot is taken after every list build and every
-  // kSnapSteps steps since, in sweeps or in replayable plain steps (step_once) (its cost: a copy of the positions, velocities and
-  // spins and of the history's live records, and a read of the rest: 10-18 ms at 10^6
-  // particles, about one step; the first, whose pages are new, 180 ms). Every 64 steps it
+  // kSnapSteps steps since, in sweeps or in replayable plain steps (step_once); its cost: a
+  // copy of the positions, velocities and spins and of the history's live records, and a
+  // read of the rest: 10-18 ms at 10^6 particles, about one step; the first, whose pages
+  // are new, 180 ms. Every 64 steps it
   // took 5 % of a two-thread run at 10^6; every 256, a sweep undone takes at most 256 steps
   // again (none was undone in 1000 steps of the 10^6 gas: the margin keeps it rare).
   constexpr uint64_t kSnapSteps = 256;

@@ -170,8 +170,9 @@ class System {
   /// list build and every 256 steps since) and the steps since are taken again one at a
   /// time. A step_once between sweeps (the runner's, after which a series row, a frame or a
   /// checkpoint is written) keeps the snapshot where it can be taken again the same way
-  /// (replayable(), before and after it). Near a rebuild (SimConfig::pair_margin) it takes plain steps unless the
-  /// displacements' recent growth shows the sweep's last step stays clear of it.
+  /// (replayable(), before and after it). Near a rebuild (SimConfig::pair_margin) it takes
+  /// plain steps unless the displacements' recent growth shows the sweep's last step stays
+  /// clear of it.
   /// Returns the steps taken: k, or fewer where sweep_steps() is, or where the forecast cuts
   /// the sweep short near a rebuild (two at least).
   int step_sweep(int k);
