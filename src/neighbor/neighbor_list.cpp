@@ -905,6 +905,63 @@ double NeighborList::rebuild_measure(const Drift& d, const std::vector<Wall>& wa
   return m;
 }
 
+void NeighborList::sort_blocks(const std::array<long, 3>& nb, const std::array<double, 3>& inv, const int nt) {
+  // A counting sort of the particles by the block of their position at the build, ascending
+  // within a block: each thread finds the blocks of an equal range of particles (kept in
+  // cell_of_, the build's scratch, free until the next build) and counts them; the counts,
+  // summed block by block over the threads in order, place each thread's particles of a
+  // block after those of the threads before it.
+  const size_t n = ref_.x.size();
+  const long nblk = nb[0] * nb[1] * nb[2];
+  const Vec3* const x0 = ref_.x.data();
+  const Vec3 blo = box_lo_;
+  cell_of_.resize(n);
+  blk_order_.resize(n);
+  blk_first_.assign(size_t(nblk) + 1, 0);
+  blk_count_.assign(size_t(nt) * size_t(nblk), 0);
+  uint32_t* const id = cell_of_.data();
+  uint32_t* const cnt = blk_count_.data();
+  uint32_t* const firstb = blk_first_.data();
+  uint32_t* const ord = blk_order_.data();
+#pragma omp parallel num_threads(nt) if (nt > 1)
+  {
+    const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+    const size_t lo = n * size_t(t) / size_t(tn), hi = n * size_t(t + 1) / size_t(tn);
+    uint32_t* const c = cnt + size_t(t) * size_t(nblk);
+    // (Truncation, not std::floor: a library call in a build without SSE4.1, 3 a particle.)
+    for (size_t i = lo; i < hi; ++i) {
+      long k[3];
+      for (int d = 0; d < 3; ++d) {
+        const double u = (x0[i][d] - blo[d]) * inv[d];
+        k[d] = u > 0 ? (u < double(nb[d]) ? long(u) : nb[d] - 1) : 0;  // NaN, below: 0
+      }
+      const uint32_t q = uint32_t((k[2] * nb[1] + k[1]) * nb[0] + k[0]);
+      id[i] = q;
+      ++c[q];
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      // Block q's particles start after all blocks before it; within it, thread u's after
+      // those of threads before u: c[u][q] becomes thread u's first place in block q.
+      uint32_t at = 0;
+      for (long q = 0; q < nblk; ++q) {
+        firstb[q] = at;
+        for (int u = 0; u < tn; ++u) {
+          uint32_t& e = cnt[size_t(u) * size_t(nblk) + size_t(q)];
+          const uint32_t m = e;
+          e = at;
+          at += m;
+        }
+      }
+      firstb[nblk] = at;
+    }  // implicit barrier
+    for (size_t i = lo; i < hi; ++i) ord[c[id[i]]++] = uint32_t(i);
+  }
+  blk_builds_ = stats.builds;
+  blk_nb_ = nb;
+}
+
 bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& walls, double skin) {
   const size_t n = p.size();
   if (!(local_cutoffs > 0) || tracks_radii() || !has_reference(n) || n == 0 || skin != skin_) return false;
@@ -929,114 +986,120 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     edge *= 1.25;
   }
   const long nblk = nb[0] * nb[1] * nb[2];
-  constexpr size_t W = 7;  // a block's record: displacement box lo xyz, hi xyz, largest d^2
+  constexpr size_t W = 7;  // a block's record: displacement box lo xyz, hi xyz, largest displacement
   const int nt = long(n) > parallel_min ? std::max(1, omp_get_max_threads()) : 1;
-  if (blk_.size() < size_t(nt)) blk_.resize(size_t(nt));
   const Vec3* const x = p.x.data();
   const Vec3* const x0 = ref_.x.data();
-  const Vec3 blo = box_lo_;
-  // (Truncation, not std::floor: a library call in a build without SSE4.1, 3 a particle.)
-  auto block_of = [&](const Vec3& r) {
-    long k[3];
-    for (int d = 0; d < 3; ++d) {
-      const double t = (r[d] - blo[d]) * inv[d];
-      k[d] = t > 0 ? (t < double(nb[d]) ? long(t) : nb[d] - 1) : 0;  // NaN, below: 0
-    }
-    return (k[2] * nb[1] + k[1]) * nb[0] + k[0];
-  };
-  // Each particle's displacement since the build into its block's record (frozen ones add
-  // zero: the origin is in their block's box), per thread, then merged (min and max: exact).
-  int team = 1;
+  // The particles by block of their positions at the build (blk_order_, blk_first_), sorted
+  // once per build: a build's positions and blocks hold until the next build, and a build is
+  // followed by several checks (on the LAMMPS chute about four: kept, kept, kept, failed).
+  // Each check then sweeps the blocks, each on one thread, with no per-thread copies of the
+  // records to set up and merge, and no block to find per particle.
+  if (blk_builds_ != stats.builds || blk_order_.size() != n || blk_nb_ != nb || blk_first_.size() != size_t(nblk) + 1)
+    sort_blocks(nb, inv, nt);
+  const uint32_t* const order = blk_order_.data();
+  const uint32_t* const first = blk_first_.data();
+  blk_rec_.resize(size_t(nblk) * W);
+  double* const B = blk_rec_.data();
+  // Each block's displacements since the build (frozen particles add zero: the origin is in
+  // their block's box), its largest one, and the global bounds (as rebuild_measure's), on
+  // the threads by equal counts of particles. Min and max: exact, the same bits in any order.
+  Vec3 glo{INFINITY, INFINITY, INFINITY}, ghi{-INFINITY, -INFINITY, -INFINITY};
+  double gd2 = 0;
+  std::vector<double>& part = blk_part_;
+  part.assign(size_t(nt) * W, 0.0);
 #pragma omp parallel num_threads(nt) if (nt > 1)
   {
     const int t = omp_get_thread_num(), tn = omp_get_num_threads();
-    if (t == 0) team = tn;
-    std::vector<double>& b = blk_[size_t(t)];
-    b.resize(size_t(nblk) * W);
-    for (long q = 0; q < nblk; ++q) {
-      double* const r = b.data() + size_t(q) * W;
-      r[0] = r[1] = r[2] = INFINITY;
-      r[3] = r[4] = r[5] = -INFINITY;
-      r[6] = 0;
-    }
-    const size_t lo = n * size_t(t) / size_t(tn), hi = n * size_t(t + 1) / size_t(tn);
-    // Particles come mostly in cell order (the last re-sort's), so runs of them share a
-    // block: the record is kept in registers over a run and stored when the block changes
-    // (a load, min or max and store a particle per field would wait on the store before).
-    long cur = -1;
-    double* r = nullptr;
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0;
-    auto flush = [&] {
-      if (r) { r[0] = a0; r[1] = a1; r[2] = a2; r[3] = a3; r[4] = a4; r[5] = a5; r[6] = a6; }
+    // This thread's blocks: those whose first particle is in its equal share of them.
+    auto block_at = [&](const size_t cut) {
+      return long(std::lower_bound(first, first + nblk, uint32_t(cut)) - first);
     };
-    for (size_t i = lo; i < hi; ++i) {
-      const Vec3 dx = x[i] - x0[i];
-      const long q = block_of(x0[i]);
-      if (q != cur) {
-        flush();
-        cur = q;
-        r = b.data() + size_t(q) * W;
-        a0 = r[0]; a1 = r[1]; a2 = r[2]; a3 = r[3]; a4 = r[4]; a5 = r[5]; a6 = r[6];
+    const long q0 = t == 0 ? 0 : block_at(n * size_t(t) / size_t(tn));
+    const long q1 = t + 1 == tn ? nblk : block_at(n * size_t(t + 1) / size_t(tn));
+    double l0 = INFINITY, l1 = INFINITY, l2 = INFINITY, h0 = -INFINITY, h1 = -INFINITY, h2 = -INFINITY, m2 = 0;
+    for (long q = q0; q < q1; ++q) {
+      double a0 = INFINITY, a1 = INFINITY, a2 = INFINITY, a3 = -INFINITY, a4 = -INFINITY, a5 = -INFINITY, a6 = 0;
+      for (uint32_t k = first[q]; k < first[q + 1]; ++k) {
+        const uint32_t i = order[k];
+        const Vec3 dx = x[i] - x0[i];
+        a0 = std::min(a0, dx.x); a1 = std::min(a1, dx.y); a2 = std::min(a2, dx.z);
+        a3 = std::max(a3, dx.x); a4 = std::max(a4, dx.y); a5 = std::max(a5, dx.z);
+        a6 = std::max(a6, norm2(dx));
       }
-      a0 = std::min(a0, dx.x); a1 = std::min(a1, dx.y); a2 = std::min(a2, dx.z);
-      a3 = std::max(a3, dx.x); a4 = std::max(a4, dx.y); a5 = std::max(a5, dx.z);
-      a6 = std::max(a6, norm2(dx));
+      double* const r = B + size_t(q) * W;
+      r[0] = a0; r[1] = a1; r[2] = a2; r[3] = a3; r[4] = a4; r[5] = a5;
+      r[6] = std::sqrt(a6);  // the block's largest displacement
+      l0 = std::min(l0, a0); l1 = std::min(l1, a1); l2 = std::min(l2, a2);
+      h0 = std::max(h0, a3); h1 = std::max(h1, a4); h2 = std::max(h2, a5);
+      m2 = std::max(m2, a6);
     }
-    flush();
+    double* const o = part.data() + size_t(t) * W;
+    o[0] = l0; o[1] = l1; o[2] = l2; o[3] = h0; o[4] = h1; o[5] = h2; o[6] = m2;
+    if (t == 0)
+      for (int u = tn; u < nt; ++u) {  // a team smaller than asked: the other parts empty
+        double* const e = part.data() + size_t(u) * W;
+        e[0] = e[1] = e[2] = INFINITY;
+        e[3] = e[4] = e[5] = -INFINITY;
+      }
   }
-  double* const B = blk_[0].data();
-  for (int t = 1; t < team; ++t) {
-    const double* const o = blk_[size_t(t)].data();
-    for (size_t q = 0; q < size_t(nblk) * W; q += W) {
-      for (size_t c = 0; c < 3; ++c) B[q + c] = std::min(B[q + c], o[q + c]);
-      for (size_t c = 3; c < W; ++c) B[q + c] = std::max(B[q + c], o[q + c]);
-    }
-  }
-  // The global bounds (as rebuild_measure's) and the largest bound over two neighbouring
-  // blocks (a block with itself included), each the smaller of the joint box's diagonal and
-  // the sum of the two largest displacements.
-  Vec3 glo{INFINITY, INFINITY, INFINITY}, ghi{-INFINITY, -INFINITY, -INFINITY};
-  double gd2 = 0;
-  for (long q = 0; q < nblk; ++q) {
-    double* const r = B + size_t(q) * W;
-    glo = {std::min(glo.x, r[0]), std::min(glo.y, r[1]), std::min(glo.z, r[2])};
-    ghi = {std::max(ghi.x, r[3]), std::max(ghi.y, r[4]), std::max(ghi.z, r[5])};
-    gd2 = std::max(gd2, r[6]);
-    r[6] = std::sqrt(r[6]);  // the block's largest displacement, from here on
+  for (int t = 0; t < nt; ++t) {
+    const double* const o = part.data() + size_t(t) * W;
+    glo = {std::min(glo.x, o[0]), std::min(glo.y, o[1]), std::min(glo.z, o[2])};
+    ghi = {std::max(ghi.x, o[3]), std::max(ghi.y, o[4]), std::max(ghi.z, o[5])};
+    gd2 = std::max(gd2, o[6]);
   }
   const double move = std::sqrt(gd2), global = std::min(2 * move, norm(ghi - glo));
   // Each pair of neighbours once: a block with itself and the 13 ahead of it (in periodic
-  // directions of one or two blocks, some of them the same block or the same pair again).
-  // Squares compared, one square root at the end. Once a thread's bound passes what a kept
-  // check allows, the check fails whatever the rest (the global bound is at least the
-  // local one, so the carried bound would pass it too): the thread skips the remaining
-  // blocks (a gas's failed check at 10^6 particles: the joins were a quarter of it).
+  // directions of one or two blocks, some of them the same block or the same pair again),
+  // by rows of blocks along x, the neighbours' rows and columns looked up in tables that
+  // wrap the periodic directions (-1: outside a bounded one). Squares compared, one square
+  // root at the end. Once a bound passes what a kept check allows, the check fails whatever
+  // the rest (the global bound is at least the local one, so the carried bound would pass
+  // it too): every thread skips its remaining rows (a gas's failed check at 10^6 particles:
+  // the joins were a quarter of it; on two threads, the one that found it tells the other).
   const double lim2 = (kRecheckRoom * skin) * (kRecheckRoom * skin);
+  std::array<std::vector<long>, 3>& wrap = blk_wrap_;
+  for (int d = 0; d < 3; ++d) {
+    wrap[d].resize(size_t(nb[d]) + 2);
+    for (long c = -1; c <= nb[d]; ++c)
+      wrap[d][size_t(c + 1)] = c >= 0 && c < nb[d] ? c : periodic_[d] ? (c + nb[d]) % nb[d] : -1;
+  }
+  const long* const w0 = wrap[0].data() + 1;
+  const long* const w1 = wrap[1].data() + 1;
+  const long* const w2 = wrap[2].data() + 1;
+  const long nrow = nb[1] * nb[2];
+  std::atomic<bool> failed{false};
   double local2 = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(max : local2)
-  for (long q = 0; q < nblk; ++q) {
-    const double* const a = B + size_t(q) * W;
-    if (!(a[3] >= a[0]) || local2 > lim2) continue;  // empty, or the check failed already
-    const long k0 = q % nb[0], k1 = (q / nb[0]) % nb[1], k2 = q / (nb[0] * nb[1]);
-    const double da = a[6];
-    for (int o2 = 0; o2 <= 1; ++o2)
-      for (int o1 = o2 ? -1 : 0; o1 <= 1; ++o1)
-        for (int o0 = (o2 || o1) ? -1 : 0; o0 <= 1; ++o0) {
-          long c[3] = {k0 + o0, k1 + o1, k2 + o2};
-          bool out = false;
-          for (int d = 0; d < 3; ++d) {
-            if (c[d] >= 0 && c[d] < nb[d]) continue;
-            if (periodic_[d]) c[d] = (c[d] + nb[d]) % nb[d];
-            else out = true;
+  for (long row = 0; row < nrow; ++row) {
+    if (failed.load(std::memory_order_relaxed)) continue;  // the check failed already
+    const long k1 = row % nb[1], k2 = row / nb[1];
+    for (long k0 = 0; k0 < nb[0]; ++k0) {
+      const double* const a = B + size_t(row * nb[0] + k0) * W;
+      if (!(a[3] >= a[0])) continue;  // empty
+      const double da = a[6];
+      for (int o2 = 0; o2 <= 1; ++o2) {
+        const long c2 = w2[k2 + o2];
+        if (c2 < 0) continue;
+        for (int o1 = o2 ? -1 : 0; o1 <= 1; ++o1) {
+          const long c1 = w1[k1 + o1];
+          if (c1 < 0) continue;
+          const double* const er = B + size_t((c2 * nb[1] + c1) * nb[0]) * W;
+          for (int o0 = (o2 || o1) ? -1 : 0; o0 <= 1; ++o0) {
+            const long c0 = w0[k0 + o0];
+            if (c0 < 0) continue;
+            const double* const e = er + size_t(c0) * W;
+            if (!(e[3] >= e[0])) continue;
+            const Vec3 jl{std::min(a[0], e[0]), std::min(a[1], e[1]), std::min(a[2], e[2])};
+            const Vec3 jh{std::max(a[3], e[3]), std::max(a[4], e[4]), std::max(a[5], e[5])};
+            const double sum = da + e[6];
+            local2 = std::max(local2, std::min(norm2(jh - jl), sum * sum));
           }
-          if (out) continue;
-          const double* const e = B + size_t((c[2] * nb[1] + c[1]) * nb[0] + c[0]) * W;
-          if (!(e[3] >= e[0])) continue;
-          const Vec3 jl{std::min(a[0], e[0]), std::min(a[1], e[1]), std::min(a[2], e[2])};
-          const Vec3 jh{std::max(a[3], e[3]), std::max(a[4], e[4]), std::max(a[5], e[5])};
-          const double sum = da + e[6];
-          local2 = std::max(local2, std::min(norm2(jh - jl), sum * sum));
         }
+      }
+    }
+    if (local2 > lim2) failed.store(true, std::memory_order_relaxed);
   }
   const double local = std::sqrt(local2);
   // Particles in blocks that are not neighbours (two or more slabs apart in some direction

@@ -750,3 +750,98 @@ TEST(NeighborList, LocalCheckCarriesItsBounds) {
   ASSERT_TRUE(t.needs_rebuild(q, {}, skin));
   EXPECT_FALSE(t.recheck(q, {}, skin));
 }
+
+// The local check's bound, computed by brute force from its definition and compared to the
+// last bit (min, max and the same norms: exact): each particle in the block of its position
+// at the build (the periodic bed's box cut into 5 slabs a direction, of 4 mm >= two cutoffs
+// of 3.4 mm), and over every two blocks that are neighbours (a block with itself included,
+// across the periodic faces too) the smaller of their joint displacement box's diagonal and
+// the sum of their largest displacements; the global bound the smaller of twice the largest
+// displacement and the diagonal of all. The displacements: a smooth periodic field of 0.25
+// skin (kept) or 0.6 skin (not kept) with jitter. On one to four threads, and again after a
+// build that re-sorts the particles (the check sorts them by block once per build and keeps
+// that order until the next: an order from the build before would put them in the wrong
+// blocks, and the bound would differ).
+TEST(NeighborList, LocalCheckBoundIsItsDefinitionOnAnyThreadCountAfterEveryBuild) {
+  Bed b(true, 91);
+  const double skin = b.skin, L = 0.02;
+  double rmax = 0;
+  for (size_t i = 0; i < b.p.size(); ++i) rmax = std::max(rmax, b.p.radius[i]);
+  const double edge = L / 5;
+  ASSERT_EQ(std::floor(L / (2 * (2 * rmax + skin))), 5.0);  // the check's blocks: 5 a direction
+  auto brute = [&](const std::vector<Vec3>& x0, const std::vector<Vec3>& x) {
+    constexpr int kN = 5;
+    std::vector<std::array<double, 7>> blk(kN * kN * kN, {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, 0});
+    Vec3 glo{INFINITY, INFINITY, INFINITY}, ghi{-INFINITY, -INFINITY, -INFINITY};
+    double gd2 = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      int k[3];
+      for (int d = 0; d < 3; ++d) k[d] = std::min(kN - 1, std::max(0, int(x0[i][d] / edge)));
+      std::array<double, 7>& r = blk[size_t((k[2] * kN + k[1]) * kN + k[0])];
+      const Vec3 u = x[i] - x0[i];
+      for (int d = 0; d < 3; ++d) {
+        r[size_t(d)] = std::min(r[size_t(d)], u[d]);
+        r[size_t(d) + 3] = std::max(r[size_t(d) + 3], u[d]);
+      }
+      r[6] = std::max(r[6], norm2(u));
+      glo = {std::min(glo.x, u.x), std::min(glo.y, u.y), std::min(glo.z, u.z)};
+      ghi = {std::max(ghi.x, u.x), std::max(ghi.y, u.y), std::max(ghi.z, u.z)};
+      gd2 = std::max(gd2, norm2(u));
+    }
+    double local2 = 0;
+    for (int a = 0; a < kN * kN * kN; ++a)
+      for (int e = 0; e < kN * kN * kN; ++e) {
+        bool near = true;  // neighbours: at most one slab apart in each direction, periodically
+        for (int d = 0, da = a, de = e; d < 3; ++d, da /= kN, de /= kN) {
+          const int g = std::abs(da % kN - de % kN);
+          near = near && std::min(g, kN - g) <= 1;
+        }
+        const std::array<double, 7>&A = blk[size_t(a)], &E = blk[size_t(e)];
+        if (!near || !(A[3] >= A[0]) || !(E[3] >= E[0])) continue;
+        const Vec3 jl{std::min(A[0], E[0]), std::min(A[1], E[1]), std::min(A[2], E[2])};
+        const Vec3 jh{std::max(A[3], E[3]), std::max(A[4], E[4]), std::max(A[5], E[5])};
+        const double sum = std::sqrt(A[6]) + std::sqrt(E[6]);
+        local2 = std::max(local2, std::min(norm2(jh - jl), sum * sum));
+      }
+    const double global = std::min(2 * std::sqrt(gd2), norm(ghi - glo));
+    const double far = edge * (1 - 1e-9) - 1e-12 * L - 2 * rmax;
+    return std::min(global, std::max(std::sqrt(local2), global - (far - skin)));
+  };
+  Rng rng(5);
+  auto displace = [&](const double amp) {
+    const double k = 2 * M_PI / L;
+    for (size_t i = 0; i < b.p.size(); ++i) {
+      const Vec3 x = b.p.x[i];
+      const Vec3 jit{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+      b.p.x[i] += Vec3{std::sin(k * x.z), std::cos(k * x.x), std::sin(k * x.y + 1)} * (amp * skin) + jit * (0.02 * skin);
+    }
+  };
+  b.nl.parallel_min = 0;
+  int kept = 0, failed = 0;
+  for (int build = 0; build < 3; ++build) {
+    const std::vector<uint64_t> before = b.p.id;
+    if (build > 0) b.nl.build(b.p, {}, b.d, skin, 0.0, true);  // re-sorted: the particles' order changes
+    if (build > 0) EXPECT_NE(b.p.id, before);
+    const std::vector<Vec3> at_build = b.p.x;
+    for (const double amp : {0.25, 0.6}) {
+      b.p.x = at_build;
+      displace(amp);
+      const double want = brute(b.nl.reference().x, b.p.x);
+      for (int threads = 1; threads <= 4; ++threads) {
+        omp_set_num_threads(threads);
+        // A check from the build's positions whatever a kept one before moved the drift origin to.
+        const bool keep = b.nl.recheck(b.p, {}, skin);
+        omp_set_num_threads(1);
+        EXPECT_EQ(keep, want <= NeighborList::kRecheckRoom * skin) << "build " << build << ", " << threads << " threads";
+        if (keep) EXPECT_EQ(b.nl.reference().carried_pair, want) << "build " << build << ", " << threads << " threads";
+        kept += keep;
+        failed += !keep;
+      }
+    }
+    b.p.x = at_build;
+    displace(0.25);  // moved on before the next build re-sorts
+    for (size_t i = 0; i < b.p.size(); i += 2) b.p.x[i] += Vec3{0.3 * skin, -0.2 * skin, 0.1 * skin};
+  }
+  EXPECT_EQ(kept, 12);
+  EXPECT_EQ(failed, 12);
+}
