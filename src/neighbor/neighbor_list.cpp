@@ -1018,9 +1018,17 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     const long q0 = t == 0 ? 0 : block_at(n * size_t(t) / size_t(tn));
     const long q1 = t + 1 == tn ? nblk : block_at(n * size_t(t + 1) / size_t(tn));
     double l0 = INFINITY, l1 = INFINITY, l2 = INFINITY, h0 = -INFINITY, h1 = -INFINITY, h2 = -INFINITY, m2 = 0;
+    constexpr uint32_t kPassAhead = 16;
+    const uint32_t last = uint32_t(n - 1);
     for (long q = q0; q < q1; ++q) {
       double a0 = INFINITY, a1 = INFINITY, a2 = INFINITY, a3 = -INFINITY, a4 = -INFINITY, a5 = -INFINITY, a6 = 0;
       for (uint32_t k = first[q]; k < first[q + 1]; ++k) {
+        // The particles of a block lie in a few short runs of the particle order, mostly
+        // not in cache at a check (the build's positions are not read between checks): the
+        // lines kPassAhead particles ahead asked for, so that their misses overlap.
+        const uint32_t ia = order[std::min(k + kPassAhead, last)];
+        __builtin_prefetch(x + ia);
+        __builtin_prefetch(x0 + ia);
         const uint32_t i = order[k];
         const Vec3 dx = x[i] - x0[i];
         a0 = std::min(a0, dx.x); a1 = std::min(a1, dx.y); a2 = std::min(a2, dx.z);
@@ -1143,10 +1151,15 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     m = std::max(m, wall_room_[w] + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
   if (!(m <= kRecheckRoom * skin)) return false;
   // The lists hold: the drift from here on, the check's bounds carried.
-  ref_.from.resize(n);
-  Vec3* const from = ref_.from.data();
+  // (After a build `from` is empty, its storage kept: filled by one copy, where a resize
+  // would first write zeros over it on one thread.)
+  if (ref_.from.size() != n) {
+    ref_.from.assign(p.x.begin(), p.x.end());
+  } else {
+    Vec3* const from = ref_.from.data();
 #pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1)
-  for (size_t i = 0; i < n; ++i) from[i] = x[i];
+    for (size_t i = 0; i < n; ++i) from[i] = x[i];
+  }
   origin_ = ref_.from.data();
   ref_.carried_pair = pair;
   ref_.carried_wall = wall_room_;
