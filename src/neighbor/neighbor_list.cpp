@@ -774,7 +774,10 @@ void NeighborList::build(ParticleStore& p, const std::vector<Wall>& walls, const
   // changed since the wrap.)
   ref_.wall.resize(walls.size());
   for (size_t w = 0; w < walls.size(); ++w) ref_.wall[w] = walls[w].point;
-  ref_.from.clear();  // the drift from the build's positions (the storage kept for the checks)
+  // The drift from the build's positions; the origin's storage kept for the checks, with its
+  // length (recheck fills it on all threads, where a resize would first zero it on one).
+  if (!ref_.from.empty()) from_spare_.swap(ref_.from);
+  ref_.from.clear();
   ref_.carried_pair = 0;
   ref_.carried_wall.clear();
   origin_ = ref_.x.data();
@@ -1151,8 +1154,11 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
     m = std::max(m, wall_room_[w] + walls[w].geometric_displacement(walls[w].point - ref_.wall[w]));
   if (!(m <= kRecheckRoom * skin)) return false;
   // The lists hold: the drift from here on, the check's bounds carried.
-  // (After a build `from` is empty, its storage kept: filled by one copy, where a resize
-  // would first write zeros over it on one thread.)
+  // (After a build `from` is empty and the storage of the origin before it is in
+  // from_spare_, of the same length where the particles are the same: taken back and filled
+  // on all threads. Otherwise one copy, where a resize would first write zeros over it on
+  // one thread.)
+  if (ref_.from.size() != n && from_spare_.size() == n) ref_.from.swap(from_spare_);
   if (ref_.from.size() != n) {
     ref_.from.assign(p.x.begin(), p.x.end());
   } else {

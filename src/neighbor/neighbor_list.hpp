@@ -267,6 +267,7 @@ class NeighborList {
   /// blocks a direction, inv their count per unit length; nt threads).
   void sort_blocks(const std::array<long, 3>& nb, const std::array<double, 3>& inv, int nt);
   std::vector<double> wall_room_;  // the local check's per-wall bounds (carried_wall)
+  std::vector<Vec3> from_spare_;  // the drift origin's storage while ref_.from is empty (build, recheck)
   // scratch reused across builds
   std::vector<uint32_t> cell_of_, cell_start_, cell_list_, fill_;
   // Several threads: the cell order cut into one part a thread (its first cells, and ncell),
