@@ -961,6 +961,14 @@ void NeighborList::sort_blocks(const std::array<long, 3>& nb, const std::array<d
     }  // implicit barrier
     for (size_t i = lo; i < hi; ++i) ord[c[id[i]]++] = uint32_t(i);
   }
+  // The joins' neighbour tables: slab c of direction d (-1 to nb[d]) wrapped where d is
+  // periodic, -1 outside a bounded direction.
+  for (int d = 0; d < 3; ++d) {
+    blk_wrap_[size_t(d)].resize(size_t(nb[size_t(d)]) + 2);
+    for (long c = -1; c <= nb[size_t(d)]; ++c)
+      blk_wrap_[size_t(d)][size_t(c + 1)] =
+          c >= 0 && c < nb[size_t(d)] ? c : periodic_[size_t(d)] ? (c + nb[size_t(d)]) % nb[size_t(d)] : -1;
+  }
   blk_builds_ = stats.builds;
   blk_nb_ = nb;
 }
@@ -1070,15 +1078,9 @@ bool NeighborList::recheck(const ParticleStore& p, const std::vector<Wall>& wall
   // it too): every thread skips its remaining rows (a gas's failed check at 10^6 particles:
   // the joins were a quarter of it; on two threads, the one that found it tells the other).
   const double lim2 = (kRecheckRoom * skin) * (kRecheckRoom * skin);
-  std::array<std::vector<long>, 3>& wrap = blk_wrap_;
-  for (int d = 0; d < 3; ++d) {
-    wrap[d].resize(size_t(nb[d]) + 2);
-    for (long c = -1; c <= nb[d]; ++c)
-      wrap[d][size_t(c + 1)] = c >= 0 && c < nb[d] ? c : periodic_[d] ? (c + nb[d]) % nb[d] : -1;
-  }
-  const long* const w0 = wrap[0].data() + 1;
-  const long* const w1 = wrap[1].data() + 1;
-  const long* const w2 = wrap[2].data() + 1;
+  const long* const w0 = blk_wrap_[0].data() + 1;  // (sort_blocks: the build's blocks)
+  const long* const w1 = blk_wrap_[1].data() + 1;
+  const long* const w2 = blk_wrap_[2].data() + 1;
   const long nrow = nb[1] * nb[2];
   std::atomic<bool> failed{false};
   double local2 = 0;

@@ -253,18 +253,19 @@ class NeighborList {
   std::array<bool, 3> periodic_{};
   double skin_ = 0, range_ = 0, reach_ = 0;
   Vec3 box_lo_, box_hi_;  // the build's bounds (periodic directions: the domain's)
-  // The local check's blocks (the build's positions binned): the particles sorted by block
-  // (blk_order_, each block's first place in blk_first_) for the build blk_builds_ and the
-  // blocks blk_nb_ (sort_blocks); each block's displacement box and largest displacement (lo
-  // xyz, hi xyz, d); per thread, its blocks' global bounds; the sort's counts; the
-  // neighbour tables of the blocks' pass.
+  // The local check's blocks (the build's positions binned), made by sort_blocks for the
+  // build blk_builds_ and the blocks blk_nb_: the particles sorted by block (blk_order_, each
+  // block's first place in blk_first_; the sort's counts in blk_count_) and the joins'
+  // neighbour tables (blk_wrap_); per check, each block's displacement box and largest
+  // displacement (lo xyz, hi xyz, d) and per thread its blocks' global bounds.
   std::vector<uint32_t> blk_order_, blk_first_, blk_count_;
   uint64_t blk_builds_ = ~uint64_t(0);
   std::array<long, 3> blk_nb_{};
   std::vector<double> blk_rec_, blk_part_;
   std::array<std::vector<long>, 3> blk_wrap_;
   /// Sorts the particles by the local check's block of their position at the build (nb
-  /// blocks a direction, inv their count per unit length; nt threads).
+  /// blocks a direction, inv their count per unit length; nt threads), and makes the joins'
+  /// neighbour tables for those blocks.
   void sort_blocks(const std::array<long, 3>& nb, const std::array<double, 3>& inv, int nt);
   std::vector<double> wall_room_;  // the local check's per-wall bounds (carried_wall)
   std::vector<Vec3> from_spare_;  // the drift origin's storage while ref_.from is empty (build, recheck)
